@@ -1,0 +1,12 @@
+# dynahand_set_warnings(target): the project's warning set; errors when DYNAHAND_WERROR.
+# -ffp-contract=off keeps results bit-identical between builds that would fuse
+# multiply-adds differently (determinism tests compare hashes of float state).
+function(dynahand_set_warnings target)
+  target_compile_options(${target} PRIVATE
+    -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast -Wcast-align
+    -Wunused -Woverloaded-virtual -Wnull-dereference -Wdouble-promotion -Wformat=2
+    -Wimplicit-fallthrough -ffp-contract=off)
+  if(DYNAHAND_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+endfunction()

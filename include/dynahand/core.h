@@ -1,0 +1,105 @@
+// dynahand core vocabulary: Eigen aliases, rigid poses, Result<T> and hashing.
+// Units: metres, seconds, radians everywhere inside dynahand. Camera frame as
+// OpenCV: x right, y down, z forward.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <variant>
+
+namespace dynahand {
+
+using Vec2 = Eigen::Vector2f;
+using Vec3 = Eigen::Vector3f;
+using Vec4 = Eigen::Vector4f;
+using Mat3 = Eigen::Matrix3f;
+using Quat = Eigen::Quaternionf;
+using Isometry = Eigen::Isometry3f;
+
+// A rigid transform: x_world = q * x_local + p. Plain data; q is kept unit length.
+struct Pose {
+  Vec3 p = Vec3::Zero();     // position, m
+  Quat q = Quat::Identity();  // orientation, unit quaternion
+
+  static Pose identity() { return {}; }
+  Vec3 transform(const Vec3& local) const { return q * local + p; }
+  Vec3 rotate(const Vec3& local) const { return q * local; }
+  Vec3 inverseTransform(const Vec3& world) const { return q.conjugate() * (world - p); }
+  Pose inverse() const {
+    const Quat qi = q.conjugate();
+    return {qi * (-p), qi};
+  }
+  // (a * b).transform(x) == a.transform(b.transform(x))
+  Pose operator*(const Pose& b) const { return {q * b.p + p, (q * b.q).normalized()}; }
+  Isometry toIsometry() const {
+    Isometry t = Isometry::Identity();
+    t.linear() = q.toRotationMatrix();
+    t.translation() = p;
+    return t;
+  }
+};
+
+// Interpolates positions linearly and orientations by slerp; t in [0, 1].
+Pose interpolate(const Pose& a, const Pose& b, float t);
+
+// A recoverable failure with a human-readable reason (files, cameras, user input).
+// Programmer errors are asserts, not Errors.
+struct Error {
+  std::string message;
+};
+
+// Either a value or an Error. A small stand-in for C++23 std::expected.
+template <class T>
+class [[nodiscard]] Result {
+ public:
+  Result(T value) : data_(std::move(value)) {}  // NOLINT(google-explicit-constructor)
+  Result(Error error) : data_(std::move(error)) {}  // NOLINT(google-explicit-constructor)
+
+  bool ok() const { return data_.index() == 0; }
+  explicit operator bool() const { return ok(); }
+  T& value() & { return std::get<0>(data_); }
+  const T& value() const& { return std::get<0>(data_); }
+  T&& value() && { return std::get<0>(std::move(data_)); }
+  T& operator*() & { return value(); }
+  const T& operator*() const& { return value(); }
+  T* operator->() { return &value(); }
+  const T* operator->() const { return &value(); }
+  const Error& error() const { return std::get<1>(data_); }
+  const std::string& message() const { return error().message; }
+
+ private:
+  std::variant<T, Error> data_;
+};
+
+// Result for operations that produce nothing but can fail.
+struct Ok {};
+using Status = Result<Ok>;
+
+// 64-bit FNV-1a, used for determinism hashes of float state (bit patterns).
+class Fnv1a {
+ public:
+  void add(const void* data, std::size_t bytes);
+  void add(float v) { add(&v, sizeof v); }
+  void add(const Vec3& v) { add(v.data(), sizeof(float) * 3); }
+  void add(const Quat& q) { add(q.coeffs().data(), sizeof(float) * 4); }
+  void add(const Pose& pose) {
+    add(pose.p);
+    add(pose.q);
+  }
+  std::uint64_t value() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 14695981039346656037ull;
+};
+
+// Logging verbosity for the whole library (spdlog underneath): 0 errors only,
+// 1 warnings, 2 info (default), 3 debug.
+void setLogLevel(int level);
+
+}  // namespace dynahand

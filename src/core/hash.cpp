@@ -1,0 +1,17 @@
+#include "dynahand/core.h"
+
+namespace dynahand {
+
+void Fnv1a::add(const void* data, std::size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < bytes; ++i) {
+    h_ ^= p[i];
+    h_ *= 1099511628211ull;
+  }
+}
+
+Pose interpolate(const Pose& a, const Pose& b, float t) {
+  return {a.p + (b.p - a.p) * t, a.q.slerp(t, b.q).normalized()};
+}
+
+}  // namespace dynahand

@@ -1,0 +1,53 @@
+// Depth images and pinhole intrinsics: the data every depth source produces.
+// Camera frame as OpenCV (x right, y down, z forward), metres. Depth 0 = no data.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dynahand/core.h"
+
+namespace dynahand {
+
+// Pinhole camera. Pixel (u, v) has its centre at integer coordinates: a point
+// at (x, y, z) projects to u = fx * x / z + cx, v = fy * y / z + cy.
+struct Intrinsics {
+  int width = 0;    // pixels
+  int height = 0;   // pixels
+  float fx = 0.0f;  // focal length, pixels
+  float fy = 0.0f;  // focal length, pixels
+  float cx = 0.0f;  // principal point, pixels
+  float cy = 0.0f;  // principal point, pixels
+
+  // 3D point (m) seen at pixel (u, v) with depth z (m).
+  Vec3 deproject(float u, float v, float z) const {
+    return {(u - cx) / fx * z, (v - cy) / fy * z, z};
+  }
+  // Pixel coordinates of a 3D point (z > 0 assumed).
+  Vec2 project(const Vec3& p) const { return {fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy}; }
+  bool contains(float u, float v) const {
+    return u >= -0.5f && v >= -0.5f && u < static_cast<float>(width) - 0.5f &&
+           v < static_cast<float>(height) - 0.5f;
+  }
+  // A unit ray from the camera centre through pixel (u, v).
+  Vec3 ray(float u, float v) const { return deproject(u, v, 1.0f).normalized(); }
+};
+
+// One depth image: row-major uint16 values, metres = value * depthScale.
+struct DepthFrame {
+  int width = 0;
+  int height = 0;
+  float depthScale = 0.001f;         // metres per stored unit
+  double timestamp = 0.0;            // seconds since the start of the sequence
+  std::vector<std::uint16_t> depth;  // (height x width), 0 = no data
+
+  DepthFrame() = default;
+  DepthFrame(int w, int h, float scale) : width(w), height(h), depthScale(scale), depth(static_cast<std::size_t>(w) * h, 0) {}
+
+  std::uint16_t at(int u, int v) const { return depth[static_cast<std::size_t>(v) * width + u]; }
+  std::uint16_t& at(int u, int v) { return depth[static_cast<std::size_t>(v) * width + u]; }
+  // Depth in metres at (u, v); 0 when there is no data.
+  float metres(int u, int v) const { return static_cast<float>(at(u, v)) * depthScale; }
+};
+
+}  // namespace dynahand

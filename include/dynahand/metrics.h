@@ -1,0 +1,68 @@
+// Accuracy metrics for 21-keypoint hand tracking against ground truth.
+// Inputs in metres; reported errors in millimetres (the unit papers and users quote).
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dynahand/core.h"
+
+namespace dynahand::eval {
+
+using Keypoints21 = std::array<Vec3, 21>;  // metres, camera frame, MediaPipe order
+
+// MediaPipe / MANO keypoint names, index = keypoint id.
+extern const std::array<const char*, 21> kKeypointNames;
+
+// One sequence: per frame the ground truth (nullopt: no visible hand) and the
+// prediction (nullopt: the tracker reported the hand lost / not tracked).
+struct SequenceKeypoints {
+  std::vector<std::optional<Keypoints21>> groundTruth;
+  std::vector<std::optional<Keypoints21>> predicted;
+  double fps = 30.0;  // frames per second, for times in seconds
+};
+
+struct MetricsOptions {
+  // A frame counts as lost when the hand is visible and the prediction is missing
+  // or its maximum joint error exceeds this (mm).
+  double lostThresholdMm = 50.0;
+  std::vector<double> successThresholdsMm = {10, 20, 30, 40, 50};
+};
+
+struct KeypointMetrics {
+  int frames = 0;           // frames in the sequence
+  int evaluatedFrames = 0;  // frames with ground truth and a prediction
+  int visibleFrames = 0;    // frames with ground truth
+  double meanMm = 0, medianMm = 0, p95Mm = 0, maxMm = 0;  // over all joints of evaluated frames
+  std::array<double, 21> perJointMeanMm{};               // mean error of each keypoint
+  std::vector<double> perFrameMeanMm;  // (frames), NaN where not evaluated
+  std::vector<double> perFrameMaxMm;   // (frames), NaN where not evaluated
+  std::vector<double> successThresholdsMm;
+  // Fraction of visible frames whose maximum joint error is under each threshold (a
+  // missing prediction counts as a failure): the standard hand-pose success curve.
+  std::vector<double> successFraction;
+  // Extra frame-to-frame keypoint motion beyond the true motion, mean over joints and
+  // consecutive evaluated frame pairs (mm): |Δpredicted - Δtruth|. On a static clip
+  // this is plain jitter.
+  double jitterMm = 0;
+  int lostFrames = 0;              // visible frames counted as lost
+  int lostEpisodes = 0;            // maximal runs of lost frames
+  double meanRecoverySeconds = 0;  // mean length of lost episodes that ended in tracking
+  double maxRecoverySeconds = 0;
+  int unrecoveredEpisodes = 0;  // lost at the end of the sequence
+};
+
+// Computes every metric. groundTruth and predicted must have the same length.
+Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& sequence,
+                                               const MetricsOptions& options = {});
+
+// A Markdown report: summary table, success curve table, per-joint table.
+std::string markdownReport(const KeypointMetrics& metrics, const std::string& title);
+
+// Self-contained SVG plots (no fonts or scripts fetched).
+std::string svgErrorOverTime(const KeypointMetrics& metrics, const std::string& title);
+std::string svgSuccessCurve(const KeypointMetrics& metrics, const std::string& title);
+
+}  // namespace dynahand::eval

@@ -1,0 +1,240 @@
+#include "dynahand/convex_shape.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace dynahand::physics {
+namespace {
+
+std::vector<Vec3> boxCorners(const Vec3& h, const Vec3& centre = Vec3::Zero()) {
+  std::vector<Vec3> c;
+  for (int i = 0; i < 8; ++i) {
+    c.push_back(centre + Vec3((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(),
+                              (i & 4) ? h.z() : -h.z()));
+  }
+  return c;
+}
+
+// Exact signed distance of an axis-aligned box of half extents h centred at the origin.
+float boxSignedDistance(const Vec3& p, const Vec3& h) {
+  const Vec3 q = p.cwiseAbs() - h;
+  const float outside = q.cwiseMax(0.0f).norm();
+  const float inside = std::min(q.maxCoeff(), 0.0f);
+  return outside + inside;
+}
+
+TEST(ConvexShape, UnitCubeMassProperties) {
+  auto shape = ConvexShape::fromPoints(boxCorners(Vec3(0.5f, 0.5f, 0.5f)));
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  EXPECT_EQ(shape->vertices().size(), 8u);
+  EXPECT_EQ(shape->faces().size(), 6u);  // coplanar triangles merged into squares
+  for (const Face& f : shape->faces()) EXPECT_EQ(f.vertices.size(), 4u);
+  EXPECT_NEAR(shape->volume(), 1.0f, 1e-6f);
+  EXPECT_LT(shape->centroid().norm(), 1e-6f);
+  const Mat3 inertia = shape->inertiaAboutCentroid(6.0f);  // m (a^2 + a^2) / 12 = 1
+  EXPECT_LT((inertia - Mat3::Identity()).norm(), 1e-5f);
+  EXPECT_NEAR(shape->inscribedRadius(), 0.5f, 1e-6f);
+  EXPECT_NEAR(shape->boundingRadius(), std::sqrt(0.75f), 1e-6f);
+}
+
+TEST(ConvexShape, OffsetBoxMassPropertiesMatchClosedForm) {
+  const Vec3 h(0.01f, 0.02f, 0.04f);  // finger-bone sized, m
+  const Vec3 centre(0.1f, -0.05f, 0.3f);
+  auto shape = ConvexShape::fromPoints(boxCorners(h, centre));
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  EXPECT_NEAR(shape->volume(), 8.0f * h.prod(), 1e-9f);
+  EXPECT_LT((shape->centroid() - centre).norm(), 1e-6f);
+  const float m = 2.0f;
+  const Vec3 s = 2.0f * h;
+  const Mat3 expected = Vec3(m / 12.0f * (s.y() * s.y() + s.z() * s.z()),
+                             m / 12.0f * (s.x() * s.x() + s.z() * s.z()),
+                             m / 12.0f * (s.x() * s.x() + s.y() * s.y()))
+                            .asDiagonal();
+  EXPECT_LT((shape->inertiaAboutCentroid(m) - expected).norm(), 1e-3f * expected.norm());
+  EXPECT_NEAR(shape->inscribedRadius(), 0.01f, 1e-6f);  // half the smallest side
+  EXPECT_NEAR(shape->boundingRadius(), h.norm(), 1e-6f);
+}
+
+TEST(ConvexShape, RotatedBoxInertiaRotatesWithIt) {
+  const Vec3 h(0.1f, 0.2f, 0.3f);
+  const Mat3 r = Eigen::AngleAxisf(0.6f, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  std::vector<Vec3> pts = boxCorners(h);
+  for (Vec3& p : pts) p = r * p;
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  const Vec3 s = 2.0f * h;
+  const Mat3 local = Vec3((s.y() * s.y() + s.z() * s.z()) / 12.0f,
+                          (s.x() * s.x() + s.z() * s.z()) / 12.0f,
+                          (s.x() * s.x() + s.y() * s.y()) / 12.0f)
+                         .asDiagonal();
+  const Mat3 expected = r * local * r.transpose();
+  EXPECT_LT((shape->inertiaAboutCentroid(1.0f) - expected).norm(), 1e-4f);
+  EXPECT_EQ(shape->faces().size(), 6u);
+}
+
+TEST(ConvexShape, TetrahedronVolumeAndCentroid) {
+  const std::vector<Vec3> pts = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  EXPECT_NEAR(shape->volume(), 1.0f / 6.0f, 1e-6f);
+  EXPECT_LT((shape->centroid() - Vec3(0.25f, 0.25f, 0.25f)).norm(), 1e-6f);
+  EXPECT_EQ(shape->faces().size(), 4u);
+}
+
+TEST(ConvexShape, InteriorPointsAreDropped) {
+  std::vector<Vec3> pts = boxCorners(Vec3(1, 1, 1));
+  pts.emplace_back(0.1f, 0.2f, 0.3f);
+  pts.emplace_back(0.0f, 0.0f, 0.0f);
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  EXPECT_EQ(shape->vertices().size(), 8u);
+}
+
+TEST(ConvexShape, FacesAreOutwardCcwSupportingPlanes) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 60; ++i) pts.emplace_back(u(rng), 0.5f * u(rng), 0.3f * u(rng));
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  for (const Face& f : shape->faces()) {
+    EXPECT_NEAR(f.normal.norm(), 1.0f, 1e-5f);
+    // Every hull vertex is on the inner side; the face's own vertices are on the plane.
+    for (const Vec3& v : shape->vertices()) EXPECT_LE(f.normal.dot(v) - f.offset, 1e-6f);
+    for (int vi : f.vertices) EXPECT_NEAR(f.normal.dot(shape->vertices()[vi]), f.offset, 1e-5f);
+    // CCW seen from outside: the polygon's area vector points along the normal.
+    Vec3 area = Vec3::Zero();
+    const Vec3& a = shape->vertices()[f.vertices[0]];
+    for (std::size_t i = 1; i + 1 < f.vertices.size(); ++i) {
+      area += (shape->vertices()[f.vertices[i]] - a).cross(shape->vertices()[f.vertices[i + 1]] - a);
+    }
+    EXPECT_GT(area.dot(f.normal), 0.0f);
+  }
+}
+
+TEST(ConvexShape, SignedDistanceMatchesBoxClosedFormEverywhere) {
+  const Vec3 h(0.3f, 0.2f, 0.1f);
+  const ConvexShape shape = ConvexShape::box(h);
+  // Inside, on faces, beyond edges and beyond vertices.
+  const std::vector<Vec3> probes = {
+      Vec3(0, 0, 0),          Vec3(0.1f, 0.05f, 0.02f), Vec3(0.5f, 0.0f, 0.0f),
+      Vec3(0.0f, -0.4f, 0.0f), Vec3(0.5f, 0.4f, 0.0f),   Vec3(-0.5f, 0.0f, -0.3f),
+      Vec3(0.4f, 0.3f, 0.2f), Vec3(-0.4f, -0.3f, -0.2f), Vec3(0.29f, 0.0f, 0.0f),
+      Vec3(0.3f, 0.2f, 0.1f)};
+  for (const Vec3& p : probes) {
+    const float expected = boxSignedDistance(p, h);
+    EXPECT_NEAR(shape.signedDistance(p), expected, 1e-6f) << p.transpose();
+    const Vec3 q = shape.closestPoint(p);
+    EXPECT_NEAR((q - p).norm(), std::abs(expected), 1e-6f) << p.transpose();
+    EXPECT_NEAR(boxSignedDistance(q, h), 0.0f, 1e-6f) << "closest point not on surface";
+  }
+  // Beyond a vertex the closest point is that vertex; beyond an edge it is on the edge.
+  EXPECT_LT((shape.closestPoint(Vec3(1, 1, 1)) - h).norm(), 1e-6f);
+  EXPECT_LT((shape.closestPoint(Vec3(1, 1, 0.05f)) - Vec3(0.3f, 0.2f, 0.05f)).norm(), 1e-6f);
+  // The closest face of a point beyond +x is the +x face.
+  const Face& fx = shape.faces()[static_cast<std::size_t>(shape.closestFace(Vec3(0.6f, 0.01f, 0)))];
+  EXPECT_LT((fx.normal - Vec3::UnitX()).norm(), 1e-6f);
+}
+
+// Brute force over a dense sampling of every face: the sampled minimum can only exceed the
+// exact distance, and by no more than the sampling spacing.
+TEST(ConvexShape, SignedDistanceMatchesBruteForceOnRandomHull) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 30; ++i) pts.push_back(Vec3(u(rng), u(rng), u(rng)).normalized() * 0.05f);
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  std::vector<Vec3> samples;
+  const int n = 40;
+  for (const Face& f : shape->faces()) {
+    const Vec3& a = shape->vertices()[f.vertices[0]];
+    for (std::size_t i = 1; i + 1 < f.vertices.size(); ++i) {
+      const Vec3& b = shape->vertices()[f.vertices[i]];
+      const Vec3& c = shape->vertices()[f.vertices[i + 1]];
+      for (int s = 0; s <= n; ++s) {
+        for (int t = 0; s + t <= n; ++t) {
+          const float fs = static_cast<float>(s) / n, ft = static_cast<float>(t) / n;
+          samples.push_back(a + fs * (b - a) + ft * (c - a));
+        }
+      }
+    }
+  }
+  const float spacing = 0.1f / n * 1.5f;  // diameter / n, with margin
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 p(0.08f * u(rng), 0.08f * u(rng), 0.08f * u(rng));
+    float brute = std::numeric_limits<float>::infinity();
+    for (const Vec3& s : samples) brute = std::min(brute, (s - p).norm());
+    const float sd = shape->signedDistance(p);
+    EXPECT_LE(std::abs(sd), brute + 1e-6f);
+    EXPECT_GE(std::abs(sd), brute - spacing);
+    // Sign agrees with the half-space test.
+    bool inside = true;
+    for (const Face& f : shape->faces()) inside = inside && f.normal.dot(p) <= f.offset;
+    EXPECT_EQ(sd <= 0.0f, inside);
+    EXPECT_NEAR((shape->closestPoint(p) - p).norm(), std::abs(sd), 1e-6f);
+  }
+}
+
+TEST(ConvexShape, SupportIsExtremeVertex) {
+  const ConvexShape shape = ConvexShape::box(Vec3(1, 2, 3));
+  EXPECT_LT((shape.support(Vec3(1, 1, 1)) - Vec3(1, 2, 3)).norm(), 1e-6f);
+  EXPECT_LT((shape.support(Vec3(-1, 0.1f, -1)) - Vec3(-1, 2, -3)).norm(), 1e-6f);
+}
+
+TEST(ConvexShape, RaycastHitsMissesAndStartsInside) {
+  const ConvexShape shape = ConvexShape::box(Vec3(0.1f, 0.1f, 0.1f));
+  auto hit = shape.raycast(Vec3(0, 0, -1), Vec3(0, 0, 1), 10.0f);
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_NEAR(*hit, 0.9f, 1e-6f);
+  auto slanted = shape.raycast(Vec3(-1, 0.05f, 0), Vec3(1, 0, 0), 10.0f);
+  ASSERT_TRUE(slanted.has_value());
+  EXPECT_NEAR(*slanted, 0.9f, 1e-6f);
+  EXPECT_FALSE(shape.raycast(Vec3(0, 0.2f, -1), Vec3(0, 0, 1), 10.0f).has_value());
+  EXPECT_FALSE(shape.raycast(Vec3(0, 0, -1), Vec3(0, 0, 1), 0.5f).has_value());  // too short
+  EXPECT_FALSE(shape.raycast(Vec3(0, 0, -1), Vec3(0, 0, -1), 10.0f).has_value());  // away
+  auto inside = shape.raycast(Vec3(0, 0, 0), Vec3(1, 0, 0), 10.0f);
+  ASSERT_TRUE(inside.has_value());
+  EXPECT_EQ(*inside, 0.0f);
+}
+
+TEST(ConvexShape, RejectsFewerThanFourPoints) {
+  const std::vector<Vec3> pts = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_FALSE(shape.ok());
+  EXPECT_NE(shape.message().find("at least 4"), std::string::npos) << shape.message();
+}
+
+TEST(ConvexShape, RejectsCoplanarPoints) {
+  const std::vector<Vec3> pts = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0),
+                                 Vec3(0.5f, 0.5f, 0)};
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_FALSE(shape.ok());
+  EXPECT_NE(shape.message().find("convex shape"), std::string::npos) << shape.message();
+}
+
+TEST(ConvexShape, RejectsCollinearPoints) {
+  const std::vector<Vec3> pts = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(3, 0, 0)};
+  EXPECT_FALSE(ConvexShape::fromPoints(pts).ok());
+}
+
+TEST(ConvexShape, RejectsNaN) {
+  const std::vector<Vec3> pts = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
+                                 Vec3(0, 0, std::numeric_limits<float>::quiet_NaN())};
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_FALSE(shape.ok());
+  EXPECT_NE(shape.message().find("non-finite"), std::string::npos) << shape.message();
+}
+
+TEST(ConvexShape, RejectsInfinity) {
+  const std::vector<Vec3> pts = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
+                                 Vec3(std::numeric_limits<float>::infinity(), 0, 1)};
+  EXPECT_FALSE(ConvexShape::fromPoints(pts).ok());
+}
+
+}  // namespace
+}  // namespace dynahand::physics

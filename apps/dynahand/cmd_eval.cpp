@@ -1,0 +1,93 @@
+// dynahand eval: accuracy of a tracked sequence against ground truth.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "dynahand/command.h"
+#include "dynahand/keypoint_io.h"
+#include "dynahand/metrics.h"
+
+namespace dynahand::cli {
+namespace {
+
+struct EvalOptions {
+  std::string gt, pred, side = "right", out;
+  double fps = 30.0;
+  double lostMm = 50.0;
+};
+
+bool writeText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream f(path);
+  f << text;
+  return static_cast<bool>(f);
+}
+
+int runEval(const EvalOptions& o) {
+  auto gt = eval::readKeypointsJsonl(o.gt);
+  if (!gt) throw UsageError(gt.message());
+  auto pred = eval::readKeypointsJsonl(o.pred, o.side);
+  if (!pred) throw UsageError(pred.message());
+  eval::SequenceKeypoints s;
+  s.groundTruth = gt->frames;
+  s.predicted = pred->frames;
+  const std::size_t n = std::max(s.groundTruth.size(), s.predicted.size());
+  s.groundTruth.resize(n);
+  s.predicted.resize(n);
+  s.fps = o.fps;
+  eval::MetricsOptions options;
+  options.lostThresholdMm = o.lostMm;
+  auto m = eval::computeKeypointMetrics(s, options);
+  if (!m) throw std::runtime_error(m.message());
+
+  std::printf("frames %d (hand visible %d, evaluated %d)\n", m->frames, m->visibleFrames,
+              m->evaluatedFrames);
+  std::printf("21-keypoint error  mean %.2f mm  median %.2f mm  p95 %.2f mm  max %.2f mm\n",
+              m->meanMm, m->medianMm, m->p95Mm, m->maxMm);
+  std::printf("success (max joint error <=)");
+  for (std::size_t t = 0; t < m->successThresholdsMm.size(); ++t) {
+    std::printf("  %.0f mm: %.1f%%", m->successThresholdsMm[t], 100.0 * m->successFraction[t]);
+  }
+  std::printf("\njitter %.2f mm  lost frames %d in %d episodes  recovery mean %.2f s max %.2f s\n",
+              m->jitterMm, m->lostFrames, m->lostEpisodes, m->meanRecoverySeconds,
+              m->maxRecoverySeconds);
+  if (!o.out.empty()) {
+    const std::filesystem::path dir(o.out);
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    const std::string title = std::filesystem::path(o.pred).filename().string();
+    if (!writeText(dir / "report.md", eval::markdownReport(*m, "Evaluation of " + title)) ||
+        !writeText(dir / "error_over_time.svg", eval::svgErrorOverTime(*m, "Error over time")) ||
+        !writeText(dir / "success_curve.svg", eval::svgSuccessCurve(*m, "Success curve"))) {
+      throw std::runtime_error("cannot write the report into " + dir.string());
+    }
+    std::printf("wrote %s/{report.md,error_over_time.svg,success_curve.svg}\n", dir.c_str());
+  }
+  return kExitOk;
+}
+
+const CommandRegistration kRegistration{Command{
+    "eval", "measure 21-keypoint accuracy of tracked poses against ground truth",
+    [](CLI::App& sub) -> std::function<int()> {
+      auto o = std::make_shared<EvalOptions>();
+      sub.add_option("--gt", o->gt, "ground truth JSON lines (groundtruth.jsonl)")
+          ->required()
+          ->check(CLI::ExistingFile);
+      sub.add_option("--pred", o->pred, "tracker output JSON lines (dynahand track --out)")
+          ->required()
+          ->check(CLI::ExistingFile);
+      sub.add_option("--side", o->side, "which hand of the prediction to evaluate")
+          ->check(CLI::IsMember({"right", "left"}));
+      sub.add_option("--fps", o->fps, "frames per second, for recovery times")
+          ->check(CLI::Range(0.001, 100000.0));
+      sub.add_option("--lost-mm", o->lostMm, "a frame whose max joint error exceeds this is lost")
+          ->check(CLI::Range(0.001, 100000.0));
+      sub.add_option("--out", o->out, "folder for report.md and SVG plots");
+      sub.footer(
+          "Examples:\n"
+          "  dynahand eval --gt clip/groundtruth.jsonl --pred poses.jsonl\n"
+          "  dynahand eval --gt clip/groundtruth.jsonl --pred poses.jsonl --out report/");
+      return [o] { return runEval(*o); };
+    }}};
+
+}  // namespace
+}  // namespace dynahand::cli

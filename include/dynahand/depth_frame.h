@@ -2,7 +2,9 @@
 // Camera frame as OpenCV (x right, y down, z forward), metres. Depth 0 = no data.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "dynahand/core.h"
@@ -31,6 +33,20 @@ struct Intrinsics {
   }
   // A unit ray from the camera centre through pixel (u, v).
   Vec3 ray(float u, float v) const { return deproject(u, v, 1.0f).normalized(); }
+
+  // Empty when usable: positive size, finite positive focal lengths, finite
+  // principal point. Otherwise the reason, for error messages ("fx is -1").
+  std::string problem() const {
+    if (width <= 0 || height <= 0) {
+      return "image size " + std::to_string(width) + " x " + std::to_string(height) + " is not positive";
+    }
+    if (!std::isfinite(fx) || fx <= 0.0f) return "fx " + std::to_string(fx) + " is not a positive number";
+    if (!std::isfinite(fy) || fy <= 0.0f) return "fy " + std::to_string(fy) + " is not a positive number";
+    if (!std::isfinite(cx)) return "cx is not a finite number";
+    if (!std::isfinite(cy)) return "cy is not a finite number";
+    return {};
+  }
+  bool valid() const { return problem().empty(); }
 };
 
 // One depth image: row-major uint16 values, metres = value * depthScale.
@@ -48,6 +64,16 @@ struct DepthFrame {
   std::uint16_t& at(int u, int v) { return depth[static_cast<std::size_t>(v) * width + u]; }
   // Depth in metres at (u, v); 0 when there is no data.
   float metres(int u, int v) const { return static_cast<float>(at(u, v)) * depthScale; }
+  // 3D point (m, camera frame) at pixel (u, v); z = 0 when there is no data.
+  Vec3 point(const Intrinsics& k, int u, int v) const {
+    return k.deproject(static_cast<float>(u), static_cast<float>(v), metres(u, v));
+  }
+  bool empty() const { return depth.empty(); }
+  // True when the pixel buffer matches width x height and the scale is usable.
+  bool consistent() const {
+    return width >= 0 && height >= 0 && depth.size() == static_cast<std::size_t>(width) * height &&
+           std::isfinite(depthScale) && depthScale > 0.0f;
+  }
 };
 
 }  // namespace dynahand

@@ -1,0 +1,44 @@
+#include "track/error_metric.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace dynahand::track {
+
+bool inFreeSpace(const Vec3& point, const DepthFrame& depth, const Intrinsics& intrinsics) {
+  if (!(point.z() > 0.0f)) return false;
+  const Vec2 uv = intrinsics.project(point);
+  const int u = static_cast<int>(std::lround(uv.x()));
+  const int v = static_cast<int>(std::lround(uv.y()));
+  if (u < 0 || v < 0 || u >= depth.width || v >= depth.height) return false;
+  const std::uint16_t raw = depth.at(u, v);
+  return raw == 0 || depth.metres(u, v) >= point.z();
+}
+
+void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const DepthFrame& depth,
+                  const Intrinsics& intrinsics, ErrorBreakdown& out) {
+  const auto n = static_cast<std::size_t>(bodies.size());
+  out.fit.assign(n, 0.0f);
+  out.occlusion.assign(n, 0.0f);
+  out.pointCount.assign(n, 0);
+  for (const Vec3& p : points) {
+    const SurfaceHit hit = bodies.nearest(p);
+    if (hit.body < 0) continue;
+    const auto i = static_cast<std::size_t>(hit.body);
+    out.fit[i] = std::max(out.fit[i], hit.distance);
+    ++out.pointCount[i];
+  }
+  out.fitTotal = 0.0f;
+  out.occlusionTotal = 0.0f;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int body = static_cast<int>(i);
+    if (inFreeSpace(bodies.worldCentroid(body), depth, intrinsics)) {
+      out.occlusion[i] = bodies.shape(body).inscribedRadius();
+    }
+    out.fitTotal += out.fit[i];
+    out.occlusionTotal += out.occlusion[i];
+  }
+  out.total = out.fitTotal + out.occlusionTotal;
+}
+
+}  // namespace dynahand::track

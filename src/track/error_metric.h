@@ -1,0 +1,36 @@
+// The paper's 3D error metric ("Error Metric", eqs. 1-4), used only to pick the best
+// simulation, never to move the model:
+//   P_i      = sample points whose nearest hand surface point lies on body i
+//   errFit_i = max over P_i of the distance to body i's surface
+//   errOcc_i = r_i (largest inscribed sphere about the centroid) when body i's centroid
+//              projects onto a pixel showing background farther than it, or no data
+//   total    = sum errFit_i + sum errOcc_i
+// A centroid projecting outside the image adds nothing: there is no evidence there.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "dynahand/depth_frame.h"
+#include "track/posed_bodies.h"
+
+namespace dynahand::track {
+
+struct ErrorBreakdown {
+  std::vector<float> fit;        // (bodies) errFit_i, m
+  std::vector<float> occlusion;  // (bodies) errOcc_i, m
+  std::vector<int> pointCount;   // (bodies) |P_i|
+  float fitTotal = 0.0f;         // m
+  float occlusionTotal = 0.0f;   // m
+  float total = 0.0f;            // m
+};
+
+// depth: the (filtered) depth image the points came from; intrinsics its camera.
+void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const DepthFrame& depth,
+                  const Intrinsics& intrinsics, ErrorBreakdown& out);
+
+// True when the pixel under `point` shows background farther than it or no data,
+// i.e. the point sits in space the camera saw to be empty. False outside the image.
+bool inFreeSpace(const Vec3& point, const DepthFrame& depth, const Intrinsics& intrinsics);
+
+}  // namespace dynahand::track

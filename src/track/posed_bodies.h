@@ -1,0 +1,50 @@
+// The tracked model's convex bodies at one pose, in the camera (world) frame, ready
+// for point queries: which body surface is nearest to a sample point, where, and
+// through which face. Shared by the surface constraints and the error metric.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "dynahand/convex_shape.h"
+#include "dynahand/core.h"
+
+namespace dynahand::track {
+
+using BodyMask = std::uint32_t;  // bit i = body i may be matched (at most 32 bodies)
+inline constexpr BodyMask kAllBodies = ~BodyMask{0};
+
+struct SurfaceHit {
+  int body = -1;              // nearest body, -1 if none allowed
+  int face = -1;              // face of that body holding the closest point
+  float distance = 0.0f;      // unsigned distance to that body's surface, m
+  float signedDistance = 0.0f;  // negative when the point is inside the body, m
+  Vec3 localPoint = Vec3::Zero();  // closest surface point, body frame, m
+};
+
+class PosedBodies {
+ public:
+  // shapes[i] is body i's shape in its body frame; poses[i] its world pose.
+  // The shapes must outlive this object.
+  void set(std::span<const physics::ConvexShape* const> shapes, std::span<const Pose> poses);
+  void setPose(int body, const Pose& pose);
+
+  int size() const { return static_cast<int>(shapes_.size()); }
+  const physics::ConvexShape& shape(int body) const { return *shapes_[static_cast<std::size_t>(body)]; }
+  const Pose& pose(int body) const { return poses_[static_cast<std::size_t>(body)]; }
+  Vec3 worldCentroid(int body) const { return centroids_[static_cast<std::size_t>(body)]; }
+
+  // The body whose surface is nearest to p (world), among the bodies in mask. Exact:
+  // bodies are tried in order of a bounding-sphere lower bound and skipped once that
+  // bound exceeds the best distance found. Ties go to the lower body index.
+  SurfaceHit nearest(const Vec3& p, BodyMask mask = kAllBodies) const;
+
+ private:
+  std::vector<const physics::ConvexShape*> shapes_;
+  std::vector<Pose> poses_;
+  std::vector<Vec3> centroids_;    // world centroid of each body
+  std::vector<float> radii_;       // bounding radius about the centroid
+};
+
+}  // namespace dynahand::track

@@ -1,0 +1,161 @@
+// The error metric against a brute-force reference: distances from fan-triangulated
+// faces (point-triangle distance, independent of ConvexShape's queries), every body
+// tried for every point, occlusion by direct pixel lookup.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "track/error_metric.h"
+
+namespace dynahand::track {
+namespace {
+
+// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
+Vec3 closestOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Vec3 cp = p - c;
+  const float d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const float denom = 1.0f / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+float bruteSurfaceDistance(const physics::ConvexShape& s, const Pose& pose, const Vec3& p) {
+  float best = 1e9f;
+  for (const auto& face : s.faces()) {
+    const Vec3 a = pose.transform(s.vertices()[static_cast<std::size_t>(face.vertices[0])]);
+    for (std::size_t k = 1; k + 1 < face.vertices.size(); ++k) {
+      const Vec3 b = pose.transform(s.vertices()[static_cast<std::size_t>(face.vertices[k])]);
+      const Vec3 c = pose.transform(s.vertices()[static_cast<std::size_t>(face.vertices[k + 1])]);
+      best = std::min(best, (closestOnTriangle(p, a, b, c) - p).norm());
+    }
+  }
+  return best;
+}
+
+struct Scene {
+  std::vector<physics::ConvexShape> shapes;
+  std::vector<const physics::ConvexShape*> shapePtrs;
+  std::vector<Pose> poses;
+  std::vector<Vec3> points;
+  DepthFrame depth{64, 48, 0.001f};
+  Intrinsics intrinsics{64, 48, 60.0f, 60.0f, 31.5f, 23.5f};
+};
+
+Scene randomScene(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  Scene s;
+  for (int b = 0; b < 6; ++b) {
+    std::vector<Vec3> pts;
+    const Vec3 half(0.01f + 0.01f * std::abs(u(rng)), 0.008f + 0.01f * std::abs(u(rng)), 0.02f + 0.02f * std::abs(u(rng)));
+    for (int k = 0; k < 30; ++k) pts.push_back(Vec3(u(rng), u(rng), u(rng)).cwiseProduct(half));
+    auto shape = physics::ConvexShape::fromPoints(pts);
+    EXPECT_TRUE(shape.ok());
+    s.shapes.push_back(*shape);
+    s.poses.push_back({Vec3(0.05f * u(rng), 0.04f * u(rng), 0.5f + 0.05f * u(rng)),
+                       Quat(Eigen::AngleAxisf(3.0f * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()))});
+  }
+  for (auto& shape : s.shapes) s.shapePtrs.push_back(&shape);
+  for (int k = 0; k < 300; ++k) s.points.push_back(Vec3(0.08f * u(rng), 0.06f * u(rng), 0.5f + 0.08f * u(rng)));
+  // A depth image: a wall at 0.52 m with a hole of no data and a near patch at 0.40 m.
+  for (int v = 0; v < 48; ++v) {
+    for (int x = 0; x < 64; ++x) {
+      s.depth.at(x, v) = x < 10 ? 0 : (x < 40 ? 400 : 520);
+    }
+  }
+  return s;
+}
+
+TEST(ErrorMetric, MatchesBruteForceOnRandomPoses) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    Scene s = randomScene(seed);
+    PosedBodies bodies;
+    bodies.set(s.shapePtrs, s.poses);
+    ErrorBreakdown err;
+    computeError(bodies, s.points, s.depth, s.intrinsics, err);
+
+    std::vector<float> fit(s.shapes.size(), 0.0f);
+    for (const Vec3& p : s.points) {
+      int bestBody = -1;
+      float best = 1e9f;
+      for (std::size_t i = 0; i < s.shapes.size(); ++i) {
+        const float d = bruteSurfaceDistance(s.shapes[i], s.poses[i], p);
+        if (d < best) best = d, bestBody = static_cast<int>(i);
+      }
+      fit[static_cast<std::size_t>(bestBody)] = std::max(fit[static_cast<std::size_t>(bestBody)], best);
+    }
+    float total = 0;
+    for (std::size_t i = 0; i < s.shapes.size(); ++i) {
+      EXPECT_NEAR(err.fit[i], fit[i], 1e-5f) << "seed " << seed << " body " << i;
+      const Vec3 c = s.poses[i].transform(s.shapes[i].centroid());
+      const Vec2 uv = s.intrinsics.project(c);
+      const int x = static_cast<int>(std::lround(uv.x())), y = static_cast<int>(std::lround(uv.y()));
+      float occ = 0;
+      if (x >= 0 && y >= 0 && x < 64 && y < 48) {
+        const float d = s.depth.metres(x, y);
+        if (d == 0.0f || d >= c.z()) occ = s.shapes[i].inscribedRadius();
+      }
+      EXPECT_FLOAT_EQ(err.occlusion[i], occ) << "seed " << seed << " body " << i;
+      total += fit[i] + occ;
+    }
+    EXPECT_NEAR(err.total, total, 1e-4f);
+  }
+}
+
+TEST(ErrorMetric, PerfectFitHasNoFitError) {
+  // Points sampled on the visible surface of one box give errFit = 0 for it.
+  std::vector<physics::ConvexShape> shapes{physics::ConvexShape::box(Vec3(0.02f, 0.02f, 0.02f))};
+  const physics::ConvexShape* ptr = &shapes[0];
+  const Pose pose{Vec3(0, 0, 0.5f), Quat::Identity()};
+  PosedBodies bodies;
+  bodies.set(std::span(&ptr, 1), std::span(&pose, 1));
+  std::vector<Vec3> pts;
+  for (int i = -4; i <= 4; ++i)
+    for (int j = -4; j <= 4; ++j) pts.push_back(Vec3(0.004f * i, 0.004f * j, 0.48f));
+  DepthFrame depth(64, 48, 0.001f);
+  for (auto& d : depth.depth) d = 480;  // the box's front face occludes its centroid
+  ErrorBreakdown err;
+  computeError(bodies, pts, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}, err);
+  EXPECT_NEAR(err.total, 0.0f, 1e-6f);
+  EXPECT_EQ(err.pointCount[0], 81);
+  // Move the box 1 cm back: every point is 1 cm off and the centroid still occluded.
+  bodies.setPose(0, {Vec3(0, 0, 0.51f), Quat::Identity()});
+  computeError(bodies, pts, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}, err);
+  EXPECT_NEAR(err.fit[0], 0.01f, 1e-5f);
+  EXPECT_FLOAT_EQ(err.occlusion[0], 0.0f);
+  // Nothing seen at the centroid's pixel (no data): penalty = inscribed radius (2 cm).
+  for (auto& d : depth.depth) d = 0;
+  computeError(bodies, pts, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}, err);
+  EXPECT_NEAR(err.occlusion[0], 0.02f, 1e-6f);
+}
+
+TEST(PosedBodies, MaskRestrictsMatching) {
+  std::vector<physics::ConvexShape> shapes{physics::ConvexShape::box(Vec3(0.01f, 0.01f, 0.01f)),
+                                           physics::ConvexShape::box(Vec3(0.01f, 0.01f, 0.01f))};
+  std::vector<const physics::ConvexShape*> ptrs{&shapes[0], &shapes[1]};
+  std::vector<Pose> poses{{Vec3(0, 0, 0.5f), Quat::Identity()}, {Vec3(0.1f, 0, 0.5f), Quat::Identity()}};
+  PosedBodies bodies;
+  bodies.set(ptrs, poses);
+  const Vec3 p(0.0f, 0.0f, 0.48f);
+  EXPECT_EQ(bodies.nearest(p).body, 0);
+  EXPECT_NEAR(bodies.nearest(p).distance, 0.01f, 1e-6f);
+  const SurfaceHit only1 = bodies.nearest(p, 0b10);
+  EXPECT_EQ(only1.body, 1);
+  EXPECT_GT(only1.distance, 0.08f);
+  EXPECT_EQ(bodies.nearest(p, 0).body, -1);
+}
+
+}  // namespace
+}  // namespace dynahand::track

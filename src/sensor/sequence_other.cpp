@@ -154,7 +154,7 @@ Result<OpenedSource> openPngFolder(const fs::path& dir, const SequenceOpenOption
   if (const std::string problem = opened.info.intrinsics.problem(); !problem.empty()) {
     return Error{dir.string() + ": bad intrinsics: " + problem};
   }
-  if (auto ok = checkDepthScale(opened.info.depthScale, dir.string()); !ok) return ok.error();
+  if (auto ok = checkDepthScale(static_cast<double>(opened.info.depthScale), dir.string()); !ok) return ok.error();
   if (header->width != opened.info.intrinsics.width || header->height != opened.info.intrinsics.height) {
     return Error{files.front().string() + ": image is " + std::to_string(header->width) + " x " +
                  std::to_string(header->height) + " but the intrinsics are for " +

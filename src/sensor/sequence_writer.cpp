@@ -34,7 +34,7 @@ Result<SequenceWriter> SequenceWriter::create(const fs::path& dir, const Intrins
   if (const std::string problem = intrinsics.problem(); !problem.empty()) {
     return Error{dir.string() + ": cannot write a sequence with bad intrinsics: " + problem};
   }
-  if (auto ok = sensor::checkDepthScale(depthScale, dir.string()); !ok) return ok.error();
+  if (auto ok = sensor::checkDepthScale(static_cast<double>(depthScale), dir.string()); !ok) return ok.error();
   if (!std::isfinite(framesPerSecond) || framesPerSecond <= 0.0f) {
     return Error{dir.string() + ": frames per second must be positive"};
   }

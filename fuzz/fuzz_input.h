@@ -4,8 +4,8 @@
 //   part A (L bytes) and part B (the rest).
 #pragma once
 
-#include <cstddef>
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -13,13 +13,13 @@
 namespace dynahand::fuzz {
 
 enum class FuzzMode : std::uint8_t {
-  DepthPng16 = 0,      // whole: PNG bytes, decoded as 16-bit depth
-  NyuPng = 1,          // whole: PNG bytes, decoded as NYU packed depth
-  CameraJson = 2,      // whole: camera.json text
-  IntelJson = 3,       // whole: NAME.json text
-  GroundTruthLine = 4, // whole: one groundtruth.jsonl line
-  CanonicalFolder = 5, // A: camera.json, B: depth/000000.png; opened and read whole
-  IntelRecording = 6,  // A: NAME.json, B: NAME.rs; opened and read whole
+  DepthPng16 = 0,       // whole: PNG bytes, decoded as 16-bit depth
+  NyuPng = 1,           // whole: PNG bytes, decoded as NYU packed depth
+  CameraJson = 2,       // whole: camera.json text
+  IntelJson = 3,        // whole: NAME.json text
+  GroundTruthLine = 4,  // whole: one groundtruth.jsonl line
+  CanonicalFolder = 5,  // A: camera.json, B: depth/000000.png; opened and read whole
+  IntelRecording = 6,   // A: NAME.json, B: NAME.rs; opened and read whole
   Count = 7
 };
 
@@ -46,7 +46,8 @@ inline FuzzInput splitFuzzInput(std::span<const std::uint8_t> data) {
   return in;
 }
 
-inline std::vector<std::uint8_t> singleFuzzInput(FuzzMode mode, std::span<const std::uint8_t> bytes) {
+inline std::vector<std::uint8_t> singleFuzzInput(FuzzMode mode,
+                                                 std::span<const std::uint8_t> bytes) {
   std::vector<std::uint8_t> out{static_cast<std::uint8_t>(mode)};
   out.insert(out.end(), bytes.begin(), bytes.end());
   return out;
@@ -54,7 +55,8 @@ inline std::vector<std::uint8_t> singleFuzzInput(FuzzMode mode, std::span<const 
 
 inline std::vector<std::uint8_t> joinFuzzInput(FuzzMode mode, std::span<const std::uint8_t> a,
                                                std::span<const std::uint8_t> b) {
-  std::vector<std::uint8_t> out{static_cast<std::uint8_t>(mode), static_cast<std::uint8_t>(a.size() & 0xff),
+  std::vector<std::uint8_t> out{static_cast<std::uint8_t>(mode),
+                                static_cast<std::uint8_t>(a.size() & 0xff),
                                 static_cast<std::uint8_t>((a.size() >> 8) & 0xff)};
   out.insert(out.end(), a.begin(), a.end());
   out.insert(out.end(), b.begin(), b.end());

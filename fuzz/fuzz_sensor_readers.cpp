@@ -25,7 +25,8 @@ std::string_view text(std::span<const std::uint8_t> bytes) {
 
 void writeFile(const fs::path& file, std::span<const std::uint8_t> bytes) {
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 // A scratch folder per fuzzing process, reused by every input.

@@ -38,10 +38,13 @@ struct Intrinsics {
   // principal point. Otherwise the reason, for error messages ("fx is -1").
   std::string problem() const {
     if (width <= 0 || height <= 0) {
-      return "image size " + std::to_string(width) + " x " + std::to_string(height) + " is not positive";
+      return "image size " + std::to_string(width) + " x " + std::to_string(height) +
+             " is not positive";
     }
-    if (!std::isfinite(fx) || fx <= 0.0f) return "fx " + std::to_string(fx) + " is not a positive number";
-    if (!std::isfinite(fy) || fy <= 0.0f) return "fy " + std::to_string(fy) + " is not a positive number";
+    if (!std::isfinite(fx) || fx <= 0.0f)
+      return "fx " + std::to_string(fx) + " is not a positive number";
+    if (!std::isfinite(fy) || fy <= 0.0f)
+      return "fy " + std::to_string(fy) + " is not a positive number";
     if (!std::isfinite(cx)) return "cx is not a finite number";
     if (!std::isfinite(cy)) return "cy is not a finite number";
     return {};
@@ -58,7 +61,8 @@ struct DepthFrame {
   std::vector<std::uint16_t> depth;  // (height x width), 0 = no data
 
   DepthFrame() = default;
-  DepthFrame(int w, int h, float scale) : width(w), height(h), depthScale(scale), depth(static_cast<std::size_t>(w) * h, 0) {}
+  DepthFrame(int w, int h, float scale)
+      : width(w), height(h), depthScale(scale), depth(static_cast<std::size_t>(w) * h, 0) {}
 
   std::uint16_t at(int u, int v) const { return depth[static_cast<std::size_t>(v) * width + u]; }
   std::uint16_t& at(int u, int v) { return depth[static_cast<std::size_t>(v) * width + u]; }

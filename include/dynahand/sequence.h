@@ -38,7 +38,7 @@ inline constexpr int kSequenceFormatVersion = 1;
 
 struct SequenceInfo {
   Intrinsics intrinsics;
-  float depthScale = 0.001f;      // metres per stored depth unit
+  float depthScale = 0.001f;  // metres per stored depth unit
   int frameCount = 0;
   bool hasGroundTruth = false;    // groundtruth.jsonl present (canonical layout only)
   float framesPerSecond = 30.0f;  // frame i has timestamp i / framesPerSecond, s
@@ -51,14 +51,16 @@ struct SequenceInfo {
 // then get null). Refuses a directory that already holds a sequence.
 class SequenceWriter {
  public:
-  static Result<SequenceWriter> create(const std::filesystem::path& dir, const Intrinsics& intrinsics,
-                                       float depthScale, float framesPerSecond = 30.0f);
+  static Result<SequenceWriter> create(const std::filesystem::path& dir,
+                                       const Intrinsics& intrinsics, float depthScale,
+                                       float framesPerSecond = 30.0f);
   SequenceWriter(SequenceWriter&&) noexcept;
   SequenceWriter& operator=(SequenceWriter&&) noexcept;
   ~SequenceWriter();  // closes (errors are logged; call close() to see them)
 
   // The frame must match the intrinsics' size and the writer's depth scale.
-  Status write(const DepthFrame& frame, const std::optional<Keypoints21>& groundTruth = std::nullopt);
+  Status write(const DepthFrame& frame,
+               const std::optional<Keypoints21>& groundTruth = std::nullopt);
   Status close();  // flushes groundtruth.jsonl; further writes are refused
   int framesWritten() const { return frameCount_; }
   const std::filesystem::path& directory() const { return dir_; }
@@ -92,7 +94,8 @@ class SequenceReader {
  public:
   // Detects the format from the path (see the file comment).
   static Result<SequenceReader> open(const std::filesystem::path& path);
-  static Result<SequenceReader> open(const std::filesystem::path& path, const SequenceOpenOptions& options);
+  static Result<SequenceReader> open(const std::filesystem::path& path,
+                                     const SequenceOpenOptions& options);
 
   SequenceReader(SequenceReader&&) noexcept;
   SequenceReader& operator=(SequenceReader&&) noexcept;

@@ -10,14 +10,19 @@ namespace {
 
 using nlohmann::json;
 
-Error fail(const std::string& name, const std::string& problem) { return Error{name + ": " + problem}; }
+Error fail(const std::string& name, const std::string& problem) {
+  return Error{name + ": " + problem};
+}
 
-std::string typeName(const json& value) { return value.type_name(); }
+std::string typeName(const json& value) {
+  return value.type_name();
+}
 
 Result<json> parse(std::string_view text, const std::string& name) {
   json document = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
   if (document.is_discarded()) return fail(name, "not valid JSON");
-  if (!document.is_object()) return fail(name, "expected a JSON object, found " + typeName(document));
+  if (!document.is_object())
+    return fail(name, "expected a JSON object, found " + typeName(document));
   return document;
 }
 
@@ -35,7 +40,8 @@ Result<double> number(const json& object, const char* key, const std::string& na
 
 Result<int> pixelCount(double value, const char* key, const std::string& name) {
   if (value != std::floor(value) || value < 1.0 || value > 16384.0) {
-    return fail(name, std::string("\"") + key + "\" must be a whole number of pixels in 1..16384, found " +
+    return fail(name, std::string("\"") + key +
+                          "\" must be a whole number of pixels in 1..16384, found " +
                           json(value).dump());
   }
   return static_cast<int>(value);
@@ -47,17 +53,20 @@ Result<double> arrayNumber(const json& object, const char* key, std::size_t inde
   const auto it = object.find(key);
   if (it == object.end()) return fail(name, std::string("missing \"") + key + "\"");
   if (!it->is_array() || it->size() != size) {
-    return fail(name, std::string("\"") + key + "\" must be an array of " + std::to_string(size) + " numbers");
+    return fail(name, std::string("\"") + key + "\" must be an array of " + std::to_string(size) +
+                          " numbers");
   }
   const json& element = (*it)[index];
   if (!element.is_number() || !std::isfinite(element.get<double>())) {
-    return fail(name, std::string("\"") + key + "\"[" + std::to_string(index) + "] is not a finite number");
+    return fail(
+        name, std::string("\"") + key + "\"[" + std::to_string(index) + "] is not a finite number");
   }
   return element.get<double>();
 }
 
 Status checkIntrinsics(const Intrinsics& k, const std::string& name) {
-  if (const std::string problem = k.problem(); !problem.empty()) return fail(name, "bad intrinsics: " + problem);
+  if (const std::string problem = k.problem(); !problem.empty())
+    return fail(name, "bad intrinsics: " + problem);
   return Ok{};
 }
 
@@ -72,7 +81,8 @@ std::string shortest(float value) {
 
 Status checkDepthScale(double scale, const std::string& name) {
   if (!std::isfinite(scale) || scale <= 0.0 || scale > 1.0) {
-    return fail(name, "\"depth_scale\" must be in (0, 1] metres per unit, found " + json(scale).dump());
+    return fail(name,
+                "\"depth_scale\" must be in (0, 1] metres per unit, found " + json(scale).dump());
   }
   return Ok{};
 }
@@ -85,7 +95,8 @@ Result<CameraDescription> parseCameraJson(std::string_view text, const std::stri
       return fail(name, "\"version\" must be a positive integer");
     }
     if (it->get<std::int64_t>() > kSequenceFormatVersion) {
-      return fail(name, "format version " + it->dump() + " is newer than this dynahand understands (" +
+      return fail(name, "format version " + it->dump() +
+                            " is newer than this dynahand understands (" +
                             std::to_string(kSequenceFormatVersion) + ")");
     }
   }
@@ -101,8 +112,12 @@ Result<CameraDescription> parseCameraJson(std::string_view text, const std::stri
   if (!width) return width.error();
   auto height = pixelCount(values[1], "height", name);
   if (!height) return height.error();
-  camera.intrinsics = {*width, *height, static_cast<float>(values[2]), static_cast<float>(values[3]),
-                       static_cast<float>(values[4]), static_cast<float>(values[5])};
+  camera.intrinsics = {*width,
+                       *height,
+                       static_cast<float>(values[2]),
+                       static_cast<float>(values[3]),
+                       static_cast<float>(values[4]),
+                       static_cast<float>(values[5])};
   if (auto ok = checkIntrinsics(camera.intrinsics, name); !ok) return ok.error();
   if (auto ok = checkDepthScale(values[6], name); !ok) return ok.error();
   camera.depthScale = static_cast<float>(values[6]);
@@ -117,18 +132,19 @@ Result<CameraDescription> parseCameraJson(std::string_view text, const std::stri
 
 std::string formatCameraJson(const CameraDescription& camera) {
   const Intrinsics& k = camera.intrinsics;
-  return "{\"version\":" + std::to_string(kSequenceFormatVersion) + ",\"width\":" + std::to_string(k.width) +
-         ",\"height\":" + std::to_string(k.height) + ",\"fx\":" + shortest(k.fx) + ",\"fy\":" + shortest(k.fy) +
-         ",\"cx\":" + shortest(k.cx) + ",\"cy\":" + shortest(k.cy) +
-         ",\"depth_scale\":" + shortest(camera.depthScale) + ",\"fps\":" + shortest(camera.framesPerSecond) +
-         "}\n";
+  return "{\"version\":" + std::to_string(kSequenceFormatVersion) +
+         ",\"width\":" + std::to_string(k.width) + ",\"height\":" + std::to_string(k.height) +
+         ",\"fx\":" + shortest(k.fx) + ",\"fy\":" + shortest(k.fy) + ",\"cx\":" + shortest(k.cx) +
+         ",\"cy\":" + shortest(k.cy) + ",\"depth_scale\":" + shortest(camera.depthScale) +
+         ",\"fps\":" + shortest(camera.framesPerSecond) + "}\n";
 }
 
 Result<CameraDescription> parseIntelCameraJson(std::string_view text, const std::string& name) {
   auto document = parse(text, name);
   if (!document) return document.error();
   const auto it = document->find("dcamera");
-  if (it == document->end()) return fail(name, "missing \"dcamera\" (the depth camera description)");
+  if (it == document->end())
+    return fail(name, "missing \"dcamera\" (the depth camera description)");
   if (!it->is_object()) return fail(name, "\"dcamera\" is not an object");
   const std::string where = name + " dcamera";
   const json& d = *it;
@@ -149,8 +165,12 @@ Result<CameraDescription> parseIntelCameraJson(std::string_view text, const std:
   auto height = pixelCount(values[1], "dims[1]", where);
   if (!height) return height.error();
   // Their deprojection, x = (u - cx) / fx * z, is ours: pixel centres at integers.
-  camera.intrinsics = {*width, *height, static_cast<float>(values[2]), static_cast<float>(values[3]),
-                       static_cast<float>(values[4]), static_cast<float>(values[5])};
+  camera.intrinsics = {*width,
+                       *height,
+                       static_cast<float>(values[2]),
+                       static_cast<float>(values[3]),
+                       static_cast<float>(values[4]),
+                       static_cast<float>(values[5])};
   if (auto ok = checkIntrinsics(camera.intrinsics, where); !ok) return ok.error();
   return camera;
 }
@@ -166,7 +186,8 @@ Result<GroundTruthLine> parseGroundTruthLine(std::string_view line, const std::s
   GroundTruthLine out;
   out.frame = static_cast<int>(*frame);
   const auto it = document->find("keypoints21");
-  if (it == document->end()) return fail(where, "missing \"keypoints21\" (use null for a frame without a hand)");
+  if (it == document->end())
+    return fail(where, "missing \"keypoints21\" (use null for a frame without a hand)");
   if (it->is_null()) return out;
   if (!it->is_array() || it->size() != 21) {
     return fail(where, "\"keypoints21\" must be null or an array of 21 [x,y,z] points");

@@ -18,10 +18,13 @@ constexpr std::array<std::uint8_t, 8> kPngSignature{0x89, 'P', 'N', 'G', '\r', '
 constexpr std::int64_t kMaxPixels = 4096 * 4096;
 
 std::uint32_t readBigEndian32(const std::uint8_t* p) {
-  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         p[3];
 }
 
-Error fail(const std::string& name, const std::string& problem) { return Error{name + ": " + problem}; }
+Error fail(const std::string& name, const std::string& problem) {
+  return Error{name + ": " + problem};
+}
 
 // Decodes with OpenCV after the header was checked; returns the raw Mat.
 Result<cv::Mat> decode(std::span<const std::uint8_t> bytes, const std::string& name) {
@@ -34,15 +37,18 @@ Result<cv::Mat> decode(std::span<const std::uint8_t> bytes, const std::string& n
   } catch (const cv::Exception& e) {
     return fail(name, std::string("PNG could not be decoded (") + e.what() + ")");
   }
-  if (image.empty()) return fail(name, "PNG data is truncated or corrupt (the image could not be decoded)");
+  if (image.empty())
+    return fail(name, "PNG data is truncated or corrupt (the image could not be decoded)");
   return image;
 }
 
-Status checkSize(const PngHeader& header, const std::string& name, int expectWidth, int expectHeight) {
-  if (expectWidth > 0 && expectHeight > 0 && (header.width != expectWidth || header.height != expectHeight)) {
-    return fail(name, "image is " + std::to_string(header.width) + " x " + std::to_string(header.height) +
-                          " but the camera description says " + std::to_string(expectWidth) + " x " +
-                          std::to_string(expectHeight));
+Status checkSize(const PngHeader& header, const std::string& name, int expectWidth,
+                 int expectHeight) {
+  if (expectWidth > 0 && expectHeight > 0 &&
+      (header.width != expectWidth || header.height != expectHeight)) {
+    return fail(name, "image is " + std::to_string(header.width) + " x " +
+                          std::to_string(header.height) + " but the camera description says " +
+                          std::to_string(expectWidth) + " x " + std::to_string(expectHeight));
   }
   return Ok{};
 }
@@ -51,24 +57,41 @@ Status checkSize(const PngHeader& header, const std::string& name, int expectWid
 
 int PngHeader::channels() const {
   switch (colorType) {
-    case 0: return 1;
-    case 2: return 3;
-    case 3: return 1;
-    case 4: return 2;
-    case 6: return 4;
-    default: return 0;
+    case 0:
+      return 1;
+    case 2:
+      return 3;
+    case 3:
+      return 1;
+    case 4:
+      return 2;
+    case 6:
+      return 4;
+    default:
+      return 0;
   }
 }
 
 std::string PngHeader::describe() const {
   const char* kind = "unknown colour type";
   switch (colorType) {
-    case 0: kind = "grey"; break;
-    case 2: kind = "RGB"; break;
-    case 3: kind = "palette"; break;
-    case 4: kind = "grey+alpha"; break;
-    case 6: kind = "RGBA"; break;
-    default: break;
+    case 0:
+      kind = "grey";
+      break;
+    case 2:
+      kind = "RGB";
+      break;
+    case 3:
+      kind = "palette";
+      break;
+    case 4:
+      kind = "grey+alpha";
+      break;
+    case 6:
+      kind = "RGBA";
+      break;
+    default:
+      break;
   }
   return std::to_string(bitDepth) + "-bit " + kind;
 }
@@ -92,7 +115,8 @@ Result<PngHeader> inspectPng(std::span<const std::uint8_t> bytes, const std::str
   header.bitDepth = ihdr[16];
   header.colorType = ihdr[17];
   if (width == 0 || height == 0 || width > 0x7fffffffu || height > 0x7fffffffu) {
-    return fail(name, "PNG header has an invalid size " + std::to_string(width) + " x " + std::to_string(height));
+    return fail(name, "PNG header has an invalid size " + std::to_string(width) + " x " +
+                          std::to_string(height));
   }
   if (static_cast<std::int64_t>(width) * height > kMaxPixels) {
     return fail(name, "PNG is " + std::to_string(width) + " x " + std::to_string(height) +
@@ -111,7 +135,8 @@ Result<DepthFrame> decodeDepthPng16(std::span<const std::uint8_t> bytes, const s
   auto header = inspectPng(bytes, name);
   if (!header) return header.error();
   if (header->bitDepth != 16 || header->colorType != 0) {
-    return fail(name, "PNG is " + header->describe() + "; a depth image must be 16-bit grey (single channel)");
+    return fail(name, "PNG is " + header->describe() +
+                          "; a depth image must be 16-bit grey (single channel)");
   }
   if (auto size = checkSize(*header, name, expectWidth, expectHeight); !size) return size.error();
   auto image = decode(bytes, name);
@@ -126,12 +151,13 @@ Result<DepthFrame> decodeDepthPng16(std::span<const std::uint8_t> bytes, const s
   return frame;
 }
 
-Result<DepthFrame> decodeNyuPng(std::span<const std::uint8_t> bytes, const std::string& name, int expectWidth,
-                                int expectHeight) {
+Result<DepthFrame> decodeNyuPng(std::span<const std::uint8_t> bytes, const std::string& name,
+                                int expectWidth, int expectHeight) {
   auto header = inspectPng(bytes, name);
   if (!header) return header.error();
   if (header->bitDepth != 8 || (header->colorType != 2 && header->colorType != 6)) {
-    return fail(name, "PNG is " + header->describe() + "; an NYU packed depth image must be 8-bit RGB");
+    return fail(name,
+                "PNG is " + header->describe() + "; an NYU packed depth image must be 8-bit RGB");
   }
   if (auto size = checkSize(*header, name, expectWidth, expectHeight); !size) return size.error();
   auto image = decode(bytes, name);
@@ -155,9 +181,11 @@ Result<DepthFrame> decodeNyuPng(std::span<const std::uint8_t> bytes, const std::
 
 Result<std::vector<std::uint8_t>> encodeDepthPng16(const DepthFrame& frame) {
   assert(frame.consistent() && "encodeDepthPng16: frame buffer does not match its size");
-  if (frame.width <= 0 || frame.height <= 0) return Error{"cannot encode an empty depth frame as PNG"};
-  const cv::Mat image(frame.height, frame.width, CV_16UC1,
-                      const_cast<std::uint16_t*>(frame.depth.data()));  // NOLINT: imencode only reads
+  if (frame.width <= 0 || frame.height <= 0)
+    return Error{"cannot encode an empty depth frame as PNG"};
+  const cv::Mat image(
+      frame.height, frame.width, CV_16UC1,
+      const_cast<std::uint16_t*>(frame.depth.data()));  // NOLINT: imencode only reads
   std::vector<std::uint8_t> bytes;
   try {
     // Fast zlib level: depth recordings are written live.
@@ -173,7 +201,8 @@ Result<std::vector<std::uint8_t>> encodeDepthPng16(const DepthFrame& frame) {
 Result<std::vector<std::uint8_t>> readFileBytes(const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) return fail(file.string(), "file not found");
-  if (std::filesystem::is_directory(file, ec)) return fail(file.string(), "is a directory, expected a file");
+  if (std::filesystem::is_directory(file, ec))
+    return fail(file.string(), "is a directory, expected a file");
   std::ifstream in(file, std::ios::binary);
   if (!in) return fail(file.string(), "cannot open for reading");
   in.seekg(0, std::ios::end);
@@ -193,7 +222,8 @@ Status writeFileBytes(const std::filesystem::path& file, std::span<const std::ui
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) return fail(file.string(), "cannot open for writing");
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));  // NOLINT
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));  // NOLINT
     out.flush();
     if (!out) return fail(file.string(), "write error (disk full?)");
   }

@@ -16,10 +16,10 @@ namespace dynahand::sensor {
 
 // What the IHDR chunk says about a PNG.
 struct PngHeader {
-  int width = 0;       // pixels
-  int height = 0;      // pixels
-  int bitDepth = 0;    // bits per channel: 1, 2, 4, 8 or 16
-  int colorType = 0;   // PNG colour type: 0 grey, 2 RGB, 3 palette, 4 grey+alpha, 6 RGBA
+  int width = 0;      // pixels
+  int height = 0;     // pixels
+  int bitDepth = 0;   // bits per channel: 1, 2, 4, 8 or 16
+  int colorType = 0;  // PNG colour type: 0 grey, 2 RGB, 3 palette, 4 grey+alpha, 6 RGBA
   int channels() const;
   std::string describe() const;  // "8-bit RGB", "16-bit grey", ...
 };

@@ -4,7 +4,9 @@
 
 namespace dynahand::sensor {
 
-bool oniSupported() { return false; }
+bool oniSupported() {
+  return false;
+}
 
 Result<OpenedSource> openOni(const std::filesystem::path& file) {
   return Error{file.string() +

@@ -58,7 +58,8 @@ class PngFolderSource final : public FrameSource {
     if (!bytes) return bytes.error();
     const int w = info_.intrinsics.width;
     const int h = info_.intrinsics.height;
-    auto frame = nyu_ ? decodeNyuPng(*bytes, file.string(), w, h) : decodeDepthPng16(*bytes, file.string(), w, h);
+    auto frame = nyu_ ? decodeNyuPng(*bytes, file.string(), w, h)
+                      : decodeDepthPng16(*bytes, file.string(), w, h);
     if (!frame) return frame.error();
     frame->depthScale = info_.depthScale;
     frame->timestamp = index / static_cast<double>(info_.framesPerSecond);
@@ -77,12 +78,14 @@ class IntelRawSource final : public FrameSource {
 
   Result<DepthFrame> read(int index) const override {
     DepthFrame frame(info_.intrinsics.width, info_.intrinsics.height, info_.depthScale);
-    const std::streamsize bytes = static_cast<std::streamsize>(frame.depth.size() * sizeof(std::uint16_t));
+    const std::streamsize bytes =
+        static_cast<std::streamsize>(frame.depth.size() * sizeof(std::uint16_t));
     std::ifstream in(file_, std::ios::binary);
     if (!in) return Error{file_.string() + ": cannot open for reading"};
     in.seekg(static_cast<std::streamoff>(index) * bytes);
     if (!in.read(reinterpret_cast<char*>(frame.depth.data()), bytes)) {  // NOLINT
-      return Error{file_.string() + ": frame " + std::to_string(index) + " could not be read (file shrank?)"};
+      return Error{file_.string() + ": frame " + std::to_string(index) +
+                   " could not be read (file shrank?)"};
     }
     if constexpr (std::endian::native == std::endian::big) {
       for (std::uint16_t& d : frame.depth) d = static_cast<std::uint16_t>((d >> 8) | (d << 8));
@@ -98,12 +101,16 @@ class IntelRawSource final : public FrameSource {
 
 }  // namespace
 
-Status checkRawSize(std::uintmax_t fileBytes, const Intrinsics& intrinsics, const std::string& name) {
-  const std::uintmax_t frameBytes = static_cast<std::uintmax_t>(intrinsics.width) * intrinsics.height * 2;
+Status checkRawSize(std::uintmax_t fileBytes, const Intrinsics& intrinsics,
+                    const std::string& name) {
+  const std::uintmax_t frameBytes =
+      static_cast<std::uintmax_t>(intrinsics.width) * intrinsics.height * 2;
   if (frameBytes == 0 || fileBytes % frameBytes != 0) {
-    return Error{name + ": size " + std::to_string(fileBytes) + " bytes is not a multiple of the frame size " +
-                 std::to_string(intrinsics.width) + " x " + std::to_string(intrinsics.height) + " x 2 = " +
-                 std::to_string(frameBytes) + " bytes (truncated recording or wrong camera description?)"};
+    return Error{name + ": size " + std::to_string(fileBytes) +
+                 " bytes is not a multiple of the frame size " + std::to_string(intrinsics.width) +
+                 " x " + std::to_string(intrinsics.height) +
+                 " x 2 = " + std::to_string(frameBytes) +
+                 " bytes (truncated recording or wrong camera description?)"};
   }
   return Ok{};
 }
@@ -113,8 +120,10 @@ Result<OpenedSource> openPngFolder(const fs::path& dir, const SequenceOpenOption
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".png" && entry.is_regular_file(ec)) names.push_back(entry.path().filename().string());
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".png" && entry.is_regular_file(ec))
+      names.push_back(entry.path().filename().string());
   }
   if (ec) return Error{dir.string() + ": cannot list the folder: " + ec.message()};
   if (names.empty()) {
@@ -136,8 +145,9 @@ Result<OpenedSource> openPngFolder(const fs::path& dir, const SequenceOpenOption
   bool nyu = false;
   if (header->bitDepth == 16 && header->colorType == 0) {
     if (!options.intrinsics) {
-      return Error{dir.string() + ": a folder of 16-bit PNGs without camera.json needs the camera intrinsics "
-                                  "(SequenceOpenOptions::intrinsics, or --intrinsics on the command line)"};
+      return Error{dir.string() +
+                   ": a folder of 16-bit PNGs without camera.json needs the camera intrinsics "
+                   "(SequenceOpenOptions::intrinsics, or --intrinsics on the command line)"};
     }
     opened.info.format = "png16";
     opened.info.intrinsics = *options.intrinsics;
@@ -154,8 +164,10 @@ Result<OpenedSource> openPngFolder(const fs::path& dir, const SequenceOpenOption
   if (const std::string problem = opened.info.intrinsics.problem(); !problem.empty()) {
     return Error{dir.string() + ": bad intrinsics: " + problem};
   }
-  if (auto ok = checkDepthScale(static_cast<double>(opened.info.depthScale), dir.string()); !ok) return ok.error();
-  if (header->width != opened.info.intrinsics.width || header->height != opened.info.intrinsics.height) {
+  if (auto ok = checkDepthScale(static_cast<double>(opened.info.depthScale), dir.string()); !ok)
+    return ok.error();
+  if (header->width != opened.info.intrinsics.width ||
+      header->height != opened.info.intrinsics.height) {
     return Error{files.front().string() + ": image is " + std::to_string(header->width) + " x " +
                  std::to_string(header->height) + " but the intrinsics are for " +
                  std::to_string(opened.info.intrinsics.width) + " x " +
@@ -169,7 +181,8 @@ Result<OpenedSource> openIntelRaw(const fs::path& rsFile, const fs::path& jsonFi
   auto text = readFileBytes(jsonFile);
   if (!text) return text.error();
   auto camera = parseIntelCameraJson(
-      std::string_view(reinterpret_cast<const char*>(text->data()), text->size()), jsonFile.string());  // NOLINT
+      std::string_view(reinterpret_cast<const char*>(text->data()), text->size()),
+      jsonFile.string());  // NOLINT
   if (!camera) return camera.error();
   std::error_code ec;
   if (!fs::is_regular_file(rsFile, ec)) return Error{rsFile.string() + ": not found"};
@@ -180,8 +193,9 @@ Result<OpenedSource> openIntelRaw(const fs::path& rsFile, const fs::path& jsonFi
   OpenedSource opened;
   opened.info.intrinsics = camera->intrinsics;
   opened.info.depthScale = camera->depthScale;
-  opened.info.frameCount = static_cast<int>(size / (static_cast<std::uintmax_t>(camera->intrinsics.width) *
-                                                    camera->intrinsics.height * 2));
+  opened.info.frameCount =
+      static_cast<int>(size / (static_cast<std::uintmax_t>(camera->intrinsics.width) *
+                               camera->intrinsics.height * 2));
   opened.info.format = "intel-rs";
   opened.info.path = rsFile;
   opened.source = std::make_unique<IntelRawSource>(rsFile, opened.info);

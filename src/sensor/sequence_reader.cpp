@@ -12,11 +12,13 @@ namespace fs = std::filesystem;
 
 std::string lowerExtension(const fs::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
-Result<sensor::OpenedSource> openDetected(const fs::path& path, const SequenceOpenOptions& options) {
+Result<sensor::OpenedSource> openDetected(const fs::path& path,
+                                          const SequenceOpenOptions& options) {
   std::error_code ec;
   const std::string ext = lowerExtension(path);
   if (!fs::exists(path, ec)) {
@@ -38,16 +40,17 @@ Result<sensor::OpenedSource> openDetected(const fs::path& path, const SequenceOp
     if (path.filename() == "camera.json") return sensor::openCanonical(path.parent_path());
     const fs::path rs = fs::path(path).replace_extension(".rs");
     if (fs::exists(rs, ec)) return sensor::openIntelRaw(rs, path);
-    return Error{path.string() + ": a .json camera file needs its depth recording " + rs.filename().string() +
-                 " beside it"};
+    return Error{path.string() + ": a .json camera file needs its depth recording " +
+                 rs.filename().string() + " beside it"};
   }
   if (ext == ".oni") return sensor::openOni(path);
   if (ext == ".png") {
     return Error{path.string() + ": a single PNG is not a sequence; open the folder that holds it"};
   }
-  return Error{path.string() +
-               ": unrecognised recording (expected a canonical sequence folder, a PNG folder, NAME.rs + "
-               "NAME.json, or an .oni file)"};
+  return Error{
+      path.string() +
+      ": unrecognised recording (expected a canonical sequence folder, a PNG folder, NAME.rs + "
+      "NAME.json, or an .oni file)"};
 }
 
 }  // namespace
@@ -56,9 +59,12 @@ SequenceReader::SequenceReader(SequenceReader&&) noexcept = default;
 SequenceReader& SequenceReader::operator=(SequenceReader&&) noexcept = default;
 SequenceReader::~SequenceReader() = default;
 
-Result<SequenceReader> SequenceReader::open(const fs::path& path) { return open(path, SequenceOpenOptions{}); }
+Result<SequenceReader> SequenceReader::open(const fs::path& path) {
+  return open(path, SequenceOpenOptions{});
+}
 
-Result<SequenceReader> SequenceReader::open(const fs::path& path, const SequenceOpenOptions& options) {
+Result<SequenceReader> SequenceReader::open(const fs::path& path,
+                                            const SequenceOpenOptions& options) {
   auto opened = openDetected(path, options);
   if (!opened) return opened.error();
   SequenceReader reader;

@@ -23,7 +23,8 @@ fs::path writeSequence(const std::string& name, int frames = 2) {
   EXPECT_TRUE(writer) << writer.message();
   for (int i = 0; i < frames; ++i) {
     DepthFrame frame(kIntrinsics.width, kIntrinsics.height, 0.001f);
-    for (std::size_t p = 0; p < frame.depth.size(); ++p) frame.depth[p] = static_cast<std::uint16_t>(400 + p % 300);
+    for (std::size_t p = 0; p < frame.depth.size(); ++p)
+      frame.depth[p] = static_cast<std::uint16_t>(400 + p % 300);
     EXPECT_TRUE(writer->write(frame));
   }
   return seq;
@@ -134,14 +135,17 @@ TEST(BadInput, PngSizeDiffersFromCameraJson) {
 
 TEST(BadInput, NonNumericIntrinsic) {
   const fs::path seq = writeSequence("non-numeric");
-  writeText(seq / "camera.json",
-            R"({"width":64,"height":48,"fx":"sixty","fy":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
-  expectError(openError(seq), seq / "camera.json", "\"fx\" is not a number (found string \"sixty\")");
+  writeText(
+      seq / "camera.json",
+      R"({"width":64,"height":48,"fx":"sixty","fy":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
+  expectError(openError(seq), seq / "camera.json",
+              "\"fx\" is not a number (found string \"sixty\")");
 }
 
 TEST(BadInput, MissingIntrinsic) {
   const fs::path seq = writeSequence("missing-key");
-  writeText(seq / "camera.json", R"({"width":64,"height":48,"fx":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
+  writeText(seq / "camera.json",
+            R"({"width":64,"height":48,"fx":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
   expectError(openError(seq), seq / "camera.json", "missing \"fy\"");
 }
 
@@ -154,14 +158,16 @@ TEST(BadInput, NegativeFocalLength) {
 
 TEST(BadInput, FractionalWidth) {
   const fs::path seq = writeSequence("fractional-width");
-  writeText(seq / "camera.json",
-            R"({"width":64.5,"height":48,"fx":60,"fy":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
+  writeText(
+      seq / "camera.json",
+      R"({"width":64.5,"height":48,"fx":60,"fy":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
   expectError(openError(seq), seq / "camera.json", "\"width\" must be a whole number of pixels");
 }
 
 TEST(BadInput, ZeroDepthScale) {
   const fs::path seq = writeSequence("zero-scale");
-  writeText(seq / "camera.json", R"({"width":64,"height":48,"fx":60,"fy":60,"cx":31.5,"cy":23.5,"depth_scale":0})");
+  writeText(seq / "camera.json",
+            R"({"width":64,"height":48,"fx":60,"fy":60,"cx":31.5,"cy":23.5,"depth_scale":0})");
   expectError(openError(seq), seq / "camera.json", "\"depth_scale\" must be in (0, 1]");
 }
 
@@ -180,8 +186,9 @@ TEST(BadInput, CameraJsonMissing) {
 
 TEST(BadInput, CameraJsonFromTheFuture) {
   const fs::path seq = writeSequence("future-version");
-  writeText(seq / "camera.json",
-            R"({"version":99,"width":64,"height":48,"fx":60,"fy":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
+  writeText(
+      seq / "camera.json",
+      R"({"version":99,"width":64,"height":48,"fx":60,"fy":60,"cx":31.5,"cy":23.5,"depth_scale":0.001})");
   expectError(openError(seq), seq / "camera.json", "format version 99 is newer");
 }
 
@@ -193,8 +200,10 @@ TEST(BadInput, UnexpectedFileInDepthFolder) {
 
 TEST(BadInput, GroundTruthLineWithTooFewKeypoints) {
   const fs::path seq = writeSequence("gt-short");
-  writeText(seq / "groundtruth.jsonl", "{\"frame\":0,\"keypoints21\":null}\n{\"frame\":1,\"keypoints21\":[[0,0,1]]}\n");
-  expectError(openError(seq), seq / "groundtruth.jsonl", "line 2: \"keypoints21\" must be null or an array of 21");
+  writeText(seq / "groundtruth.jsonl",
+            "{\"frame\":0,\"keypoints21\":null}\n{\"frame\":1,\"keypoints21\":[[0,0,1]]}\n");
+  expectError(openError(seq), seq / "groundtruth.jsonl",
+              "line 2: \"keypoints21\" must be null or an array of 21");
 }
 
 TEST(BadInput, GroundTruthPastTheLastFrame) {
@@ -220,8 +229,9 @@ TEST(BadInput, AllZeroFrameIsValid) {
 
 TEST(BadInput, RawRecordingSizeNotAMultipleOfTheFrameSize) {
   const fs::path dir = test::scratchDir("sensor-bad/rs-size");
-  writeText(dir / "rec.json",
-            R"({"dcamera":{"depth_scale":0.000125,"dims":[8,6],"focal":[5,5],"principal":[3.5,2.5]}})");
+  writeText(
+      dir / "rec.json",
+      R"({"dcamera":{"depth_scale":0.000125,"dims":[8,6],"focal":[5,5],"principal":[3.5,2.5]}})");
   std::ofstream(dir / "rec.rs", std::ios::binary) << std::string(8 * 6 * 2 * 3 + 5, '\1');
   expectError(openError(dir / "rec.rs"), dir / "rec.rs",
               "size 293 bytes is not a multiple of the frame size 8 x 6 x 2 = 96 bytes");

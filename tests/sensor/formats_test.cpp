@@ -18,7 +18,8 @@ namespace fs = std::filesystem;
 TEST(Intrinsics, PlaneAtHalfAMetreDeprojectsToZHalfEverywhere) {
   const Intrinsics k{320, 240, 238.4f, 238.4f, 157.7f, 123.0f};
   DepthFrame frame(320, 240, 0.000125f);
-  std::fill(frame.depth.begin(), frame.depth.end(), std::uint16_t{4000});  // 4000 * 0.125 mm = 0.5 m
+  std::fill(frame.depth.begin(), frame.depth.end(),
+            std::uint16_t{4000});  // 4000 * 0.125 mm = 0.5 m
   for (int v = 0; v < frame.height; v += 7) {
     for (int u = 0; u < frame.width; u += 5) {
       const Vec3 p = frame.point(k, u, v);
@@ -43,16 +44,20 @@ TEST(Intrinsics, ZeroDepthIsNoData) {
 
 TEST(Intrinsics, ProblemNamesTheBadField) {
   EXPECT_TRUE(Intrinsics({640, 480, 500.0f, 500.0f, 320.0f, 240.0f}).valid());
-  EXPECT_NE(Intrinsics({0, 480, 500.0f, 500.0f, 320.0f, 240.0f}).problem().find("size"), std::string::npos);
-  EXPECT_NE(Intrinsics({640, 480, 500.0f, 0.0f, 320.0f, 240.0f}).problem().find("fy"), std::string::npos);
-  EXPECT_NE(Intrinsics({640, 480, 500.0f, 500.0f, NAN, 240.0f}).problem().find("cx"), std::string::npos);
+  EXPECT_NE(Intrinsics({0, 480, 500.0f, 500.0f, 320.0f, 240.0f}).problem().find("size"),
+            std::string::npos);
+  EXPECT_NE(Intrinsics({640, 480, 500.0f, 0.0f, 320.0f, 240.0f}).problem().find("fy"),
+            std::string::npos);
+  EXPECT_NE(Intrinsics({640, 480, 500.0f, 500.0f, NAN, 240.0f}).problem().find("cx"),
+            std::string::npos);
   EXPECT_FALSE(Intrinsics{}.valid());
 }
 
 void writeRaw(const fs::path& file, const std::vector<std::uint16_t>& values) {
   std::ofstream out(file, std::ios::binary);
   for (std::uint16_t v : values) {
-    const char bytes[2] = {static_cast<char>(v & 0xff), static_cast<char>(v >> 8)};  // little endian
+    const char bytes[2] = {static_cast<char>(v & 0xff),
+                           static_cast<char>(v >> 8)};  // little endian
     out.write(bytes, 2);
   }
 }
@@ -63,7 +68,8 @@ TEST(IntelRaw, ReadsFramesBackToBack) {
       << R"({"camtype":"ivycam","dcamera":{"depth_scale":0.000124987,"dims":[4,3],"focal":[3.5,3.25],)"
       << R"("principal":[1.5,1.25]},"hasir":false})";
   std::vector<std::uint16_t> values(4 * 3 * 3);
-  for (std::size_t i = 0; i < values.size(); ++i) values[i] = static_cast<std::uint16_t>(i * 1999 + 1);
+  for (std::size_t i = 0; i < values.size(); ++i)
+    values[i] = static_cast<std::uint16_t>(i * 1999 + 1);
   writeRaw(dir / "rec.rs", values);
 
   for (const fs::path& path : {dir / "rec.rs", dir / "rec.json", dir / "rec"}) {
@@ -82,7 +88,8 @@ TEST(IntelRaw, ReadsFramesBackToBack) {
     for (int f = 0; f < 3; ++f) {
       auto frame = reader->frame(f);
       ASSERT_TRUE(frame) << frame.message();
-      const std::vector<std::uint16_t> expected(values.begin() + f * 12, values.begin() + (f + 1) * 12);
+      const std::vector<std::uint16_t> expected(values.begin() + f * 12,
+                                                values.begin() + (f + 1) * 12);
       EXPECT_EQ(frame->depth, expected) << "frame " << f;
       EXPECT_FLOAT_EQ(frame->depthScale, 0.000124987f);
     }
@@ -113,10 +120,12 @@ TEST(IntelRaw, ReadsTheAuthorsCameraDescription) {
 TEST(NyuPng, UnpacksGreenTimes256PlusBlue) {
   const fs::path dir = test::scratchDir("sensor-formats/nyu");
   cv::Mat packed(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
-  packed.at<cv::Vec3b>(10, 20) = cv::Vec3b(0x34, 0x03, 0x77);  // OpenCV order B, G, R: 3 * 256 + 0x34 = 820 mm
+  packed.at<cv::Vec3b>(10, 20) =
+      cv::Vec3b(0x34, 0x03, 0x77);  // OpenCV order B, G, R: 3 * 256 + 0x34 = 820 mm
   packed.at<cv::Vec3b>(479, 639) = cv::Vec3b(0xff, 0xff, 0x00);
   ASSERT_TRUE(cv::imwrite((dir / "depth_1_0000001.png").string(), packed));
-  ASSERT_TRUE(cv::imwrite((dir / "depth_1_0000002.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(0, 2, 0))));
+  ASSERT_TRUE(cv::imwrite((dir / "depth_1_0000002.png").string(),
+                          cv::Mat(480, 640, CV_8UC3, cv::Scalar(0, 2, 0))));
 
   auto reader = SequenceReader::open(dir);
   ASSERT_TRUE(reader) << reader.message();
@@ -169,7 +178,8 @@ TEST(PlainPngFolder, NeedsIntrinsicsAndReadsInNaturalOrder) {
   options.intrinsics->width = 64;  // intrinsics for another image size
   auto mismatched = SequenceReader::open(dir, options);
   ASSERT_FALSE(mismatched);
-  EXPECT_NE(mismatched.message().find("image is 32 x 24 but the intrinsics are for 64 x 24"), std::string::npos)
+  EXPECT_NE(mismatched.message().find("image is 32 x 24 but the intrinsics are for 64 x 24"),
+            std::string::npos)
       << mismatched.message();
 }
 
@@ -178,7 +188,8 @@ TEST(Oni, GarbageRecordingIsAnError) {
   std::ofstream(dir / "clip.oni") << "not an OpenNI recording";
   auto reader = SequenceReader::open(dir / "clip.oni");
   ASSERT_FALSE(reader);
-  EXPECT_NE(reader.message().find((dir / "clip.oni").string()), std::string::npos) << reader.message();
+  EXPECT_NE(reader.message().find((dir / "clip.oni").string()), std::string::npos)
+      << reader.message();
 }
 
 TEST(Formats, ListsWhatThisBuildReads) {

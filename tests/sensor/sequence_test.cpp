@@ -35,7 +35,8 @@ std::string readText(const fs::path& file) {
 Keypoints21 someKeypoints(int seed) {
   Keypoints21 k;
   for (int i = 0; i < 21; ++i) {
-    k[static_cast<std::size_t>(i)] = Vec3(0.01f * i - 0.1f, 0.003f * seed - 0.02f * i, 0.4f + 0.001f * i / 3.0f);
+    k[static_cast<std::size_t>(i)] =
+        Vec3(0.01f * i - 0.1f, 0.003f * seed - 0.02f * i, 0.4f + 0.001f * i / 3.0f);
   }
   return k;
 }
@@ -80,7 +81,8 @@ TEST(SequenceFormat, WriteThenReadGivesIdenticalData) {
     } else {
       ASSERT_TRUE(truth.has_value()) << "frame " << i;
       for (int k = 0; k < 21; ++k) {
-        EXPECT_EQ((*truth)[static_cast<std::size_t>(k)], someKeypoints(i)[static_cast<std::size_t>(k)]);
+        EXPECT_EQ((*truth)[static_cast<std::size_t>(k)],
+                  someKeypoints(i)[static_cast<std::size_t>(k)]);
       }
     }
   }
@@ -95,8 +97,9 @@ TEST(SequenceFormat, CameraJsonHasTheAgreedKeys) {
   auto writer = SequenceWriter::create(seq, kIntrinsics, 0.001f);
   ASSERT_TRUE(writer) << writer.message();
   const std::string text = readText(seq / "camera.json");
-  for (const char* key : {"\"width\":64", "\"height\":48", "\"fx\":57.25", "\"fy\":57.5", "\"cx\":31.75",
-                          "\"cy\":23.5", "\"depth_scale\":0.001", "\"version\":1"}) {
+  for (const char* key :
+       {"\"width\":64", "\"height\":48", "\"fx\":57.25", "\"fy\":57.5", "\"cx\":31.75",
+        "\"cy\":23.5", "\"depth_scale\":0.001", "\"version\":1"}) {
     EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
   }
 }

@@ -1,0 +1,193 @@
+// Articulated convex models: rigid convex bodies joined by ball joints with per-axis angle
+// limits, a collision filter and named keypoints. The model is data (docs/formats/model.md);
+// the default hand is one such model generated from anthropometric proportions. Conventions
+// (body frames, joint angles, keypoint layouts) are in docs/model.md.
+//
+// Units: metres, kilograms, radians. A model is immutable once built and cheap to share by
+// const reference (like MuJoCo's mjModel); per-frame state lives in ModelPose / JointAngles
+// (model_pose.h).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dynahand/convex_shape.h"
+#include "dynahand/core.h"
+
+namespace dynahand::model {
+
+enum class Side { Right, Left };
+enum class Handedness { None, Right, Left };  // None: not a hand
+
+// Hand size: length from the wrist crease to the middle fingertip and palm width across the
+// four finger knuckles (MCP joints), m.
+struct HandDimensions {
+  float length = 0.19f;
+  float width = 0.085f;
+};
+
+// The file format version written by saveModel (docs/formats/model.md).
+inline constexpr int kModelFormatVersion = 1;
+
+// ---- Plain description (what a model file holds); buildModel validates and compiles it ----
+
+struct BodySpec {
+  std::string name;
+  std::vector<Vec3> vertices;    // body frame, m; the body's shape is their convex hull
+  std::optional<float> mass;     // kg; at most one of mass / density
+  std::optional<float> density;  // kg/m^3; neither given: kDefaultDensity
+};
+
+struct JointSpec {
+  std::string parent;            // body names
+  std::string child;
+  Vec3 anchorParent = Vec3::Zero();  // joint centre in the parent's body frame, m
+  Vec3 anchorChild = Vec3::Zero();   // joint centre in the child's body frame, m
+  Quat frame = Quat::Identity();     // joint frame in the parent's body frame (unit)
+  Vec3 minAngle = Vec3::Zero();      // rad, per axis (flexion x, abduction y, twist z)
+  Vec3 maxAngle = Vec3::Zero();      // rad; min == max locks the axis
+};
+
+struct KeypointSpec {
+  std::string name;
+  std::string body;
+  Vec3 point = Vec3::Zero();  // body frame, m
+  float radius = 0.0f;        // distance from the point to the skin, m (OpenXR joint radius)
+};
+
+struct CollisionSpec {
+  bool ignoreJointNeighbours = true;  // bodies joined by a joint never collide
+  std::vector<std::pair<std::string, std::string>> ignoredPairs;  // body names
+};
+
+struct ModelMetadata {
+  std::string name;
+  Handedness handedness = Handedness::None;
+  float referenceLength = 0.0f;  // m; hands: wrist crease to middle fingertip
+};
+
+struct ModelSpec {
+  ModelMetadata metadata;
+  std::vector<BodySpec> bodies;  // the root is the one body that is no joint's child
+  std::vector<JointSpec> joints;
+  CollisionSpec collision;
+  std::vector<KeypointSpec> keypoints;
+};
+
+inline constexpr float kDefaultDensity = 1100.0f;  // kg/m^3, soft tissue and bone
+
+// ---- Compiled model ----
+
+struct Body {
+  std::string name;
+  std::vector<Vec3> vertices;  // as given, body frame, m (kept for exact file round trips)
+  physics::ConvexShape shape;  // their hull
+  float mass = 0.0f;           // kg
+  int parent = -1;             // body index, -1 for the root
+  int joint = -1;              // index of the joint to the parent, -1 for the root
+};
+
+struct Joint {
+  int parent = -1;  // body indices
+  int child = -1;
+  Vec3 anchorParent = Vec3::Zero();  // m, parent body frame
+  Vec3 anchorChild = Vec3::Zero();   // m, child body frame
+  Quat frame = Quat::Identity();     // joint frame in the parent body frame
+  Vec3 minAngle = Vec3::Zero();      // rad (flexion, abduction, twist)
+  Vec3 maxAngle = Vec3::Zero();      // rad
+};
+
+struct Keypoint {
+  std::string name;
+  int body = -1;
+  Vec3 point = Vec3::Zero();  // body frame, m
+  float radius = 0.0f;        // m
+};
+
+// One OpenXR joint as a frame fixed on a body (see docs/model.md for the axes).
+struct BodyFrame {
+  int body = -1;
+  Pose local;           // in the body frame
+  float radius = 0.0f;  // m
+};
+
+class ArticulatedModel {
+ public:
+  const ModelMetadata& metadata() const { return metadata_; }
+  const std::vector<Body>& bodies() const { return bodies_; }
+  const std::vector<Joint>& joints() const { return joints_; }
+  const std::vector<Keypoint>& keypoints() const { return keypoints_; }
+  const CollisionSpec& collisionSpec() const { return collision_; }
+  int bodyCount() const { return static_cast<int>(bodies_.size()); }
+  int jointCount() const { return static_cast<int>(joints_.size()); }
+  int root() const { return root_; }
+  // Body indices with every parent before its children (root first).
+  const std::vector<int>& kinematicOrder() const { return order_; }
+  // -1 when absent.
+  int bodyIndex(const std::string& name) const;
+  int keypointIndex(const std::string& name) const;
+  // Whether bodies a and b may collide (the collision filter).
+  bool collides(int a, int b) const { return collides_[static_cast<size_t>(a * bodyCount() + b)] != 0; }
+  // Whether `ancestor` is `body` or on its path to the root.
+  bool isAncestorOrSelf(int ancestor, int body) const {
+    return ancestorOrSelf_[static_cast<size_t>(body * bodyCount() + ancestor)] != 0;
+  }
+
+  // Hand layouts: present when the model names all 21 MediaPipe keypoints (docs/model.md);
+  // the OpenXR frames additionally need palm_center and the four finger *_cmc keypoints.
+  bool hasKeypoints21() const { return hasKeypoints21_; }
+  const std::array<int, 21>& keypoints21Indices() const { return keypoints21_; }  // into keypoints()
+  bool hasOpenXrJoints() const { return hasOpenXr_; }
+  const std::array<BodyFrame, 26>& openXrFrames() const { return openXr_; }
+
+  // Back to a plain description (the exact inverse of buildModel up to mass/density:
+  // bodies carry their mass).
+  ModelSpec spec() const;
+
+ private:
+  friend Result<ArticulatedModel> buildModel(const ModelSpec& spec);
+  ArticulatedModel() = default;
+
+  ModelMetadata metadata_;
+  std::vector<Body> bodies_;
+  std::vector<Joint> joints_;
+  std::vector<Keypoint> keypoints_;
+  CollisionSpec collision_;
+  int root_ = 0;
+  std::vector<int> order_;
+  std::vector<unsigned char> collides_;        // (bodyCount x bodyCount), symmetric
+  std::vector<unsigned char> ancestorOrSelf_;  // (bodyCount x bodyCount), [body][ancestor]
+  bool hasKeypoints21_ = false;
+  std::array<int, 21> keypoints21_{};
+  bool hasOpenXr_ = false;
+  std::array<BodyFrame, 26> openXr_{};
+};
+
+// Validates a description and compiles it. Errors carry the JSON path of the first problem,
+// e.g. "bodies[5].vertices: fewer than 4 non-coplanar points".
+Result<ArticulatedModel> buildModel(const ModelSpec& spec);
+
+// Model files (JSON, docs/formats/model.md). Errors name the file and the JSON path.
+Result<ArticulatedModel> loadModel(const std::filesystem::path& path);
+Result<ArticulatedModel> parseModel(const std::string& jsonText, const std::string& sourceName);
+Status saveModel(const ArticulatedModel& model, const std::filesystem::path& path);
+std::string modelToJson(const ArticulatedModel& model);  // the exact text saveModel writes
+
+// The default hand: 17 bodies (0 forearm, 1 palm, 2-4 thumb metacarpal/proximal/distal,
+// 5-7 index proximal/middle/distal, 8-10 middle, 11-13 ring, 14-16 pinky) and 16 joints
+// (joint j has child body j + 1), generated from anthropometric proportions.
+ArticulatedModel makeDefaultHand(const HandDimensions& dimensions = {}, Side side = Side::Right);
+
+// Uniform scaling about each body frame origin: every length times `factor`, masses times
+// factor^3. factor > 0.
+ArticulatedModel scaleModel(const ArticulatedModel& model, float factor);
+
+// The mirror image through each body's x = 0 plane (right hand <-> left hand). Frames stay
+// right-handed; a pose with angles (f, a, t) mirrors to (f, -a, -t) (mirrorAngles).
+ArticulatedModel mirrorModel(const ArticulatedModel& model);
+
+}  // namespace dynahand::model

@@ -1,0 +1,67 @@
+// Fitting a model pose (and optionally a uniform scale) to target keypoints under the joint
+// limits: rigid alignment of the keypoints fixed to one body (Umeyama), then damped
+// Gauss-Newton (Levenberg-Marquardt) on the root pose, every free joint angle and the scale,
+// with angles projected onto their limits after each step. Used to initialise tracking from
+// labelled keypoints and to compare with datasets.
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+#include "dynahand/model_pose.h"
+
+namespace dynahand::model {
+
+struct FitOptions {
+  bool fitScale = false;           // also estimate a uniform scale of the model
+  float minScale = 0.5f;           // scale bounds when fitScale
+  float maxScale = 2.0f;
+  int maxIterations = 60;          // Levenberg-Marquardt iterations per start
+  float meanErrorGoal = 1e-5f;     // m; stop once the mean keypoint error is below this
+  const JointAngles* initial = nullptr;  // start here (and skip the rigid alignment); not owned
+};
+
+struct FitResult {
+  JointAngles angles;       // for scaleModel(model, scale): same root, same angles
+  float scale = 1.0f;
+  float meanError = 0.0f;   // mean keypoint distance after the fit, m
+  float maxError = 0.0f;    // largest keypoint distance, m
+  int iterations = 0;       // total over all starts
+};
+
+// Reusable fitter: buffers are sized once per model, so repeated fits do not reallocate.
+class KeypointFitter {
+ public:
+  explicit KeypointFitter(const ArticulatedModel& model);
+
+  // keypointIndices index model.keypoints(); targets are world positions (m), same length.
+  // Fails (with a reason) on mismatched lengths, non-finite targets or fewer than 3 targets.
+  Result<FitResult> fit(std::span<const int> keypointIndices, std::span<const Vec3> targets,
+                        const FitOptions& options = {});
+  // The 21 MediaPipe keypoints (the model must have them).
+  Result<FitResult> fit21(const std::array<Vec3, 21>& targets, const FitOptions& options = {});
+
+ private:
+  struct Param {
+    int joint;  // -1: root / scale
+    int axis;
+  };
+  float run(std::span<const int> keypoints, std::span<const Vec3> targets, const FitOptions& options,
+            JointAngles& angles, float& scale, int& iterations);
+  float evaluate(std::span<const int> keypoints, std::span<const Vec3> targets, const JointAngles& angles, float scale,
+                 std::vector<Vec3>& positions);
+  bool rigidStart(std::span<const int> keypoints, std::span<const Vec3> targets, bool fitScale, JointAngles& angles,
+                  float& scale);
+
+  const ArticulatedModel* model_;
+  std::vector<Param> params_;  // free joint axes (min < max)
+  ModelPose pose_;
+  std::vector<Vec3> positions_, trialPositions_;
+  JointAngles trial_;
+};
+
+Result<FitResult> fitToKeypoints(const ArticulatedModel& model, const std::array<Vec3, 21>& keypoints,
+                                 const FitOptions& options = {});
+
+}  // namespace dynahand::model

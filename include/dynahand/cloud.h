@@ -1,0 +1,170 @@
+// From a depth frame to the tracker's point cloud (paper: "Sampling from a Depth
+// Sensor", "Boundary Planes"). One CloudPipeline is configured once per camera; each
+// frame, process() fills a reusable CloudFrame:
+//
+//   1. coarse search: every `coarseStep`-th pixel, range-gated; region growing from the
+//      nearest samples finds "the closest, sufficiently large volume" and its image box;
+//   2. filtering inside that box only: range gate, 3x3 median, optional bilateral,
+//      flying-pixel removal at depth edges;
+//   3. segmentation at full resolution: the region grown from the nearest filtered pixel
+//      of the coarse region, across neighbours whose depth step is small, within a
+//      hand-sized radius of that nearest point; the arm is where it was cut;
+//   4. voxel-grid subsampling of the segmented pixels (VoxelGrid);
+//   5. boundary planes around the segmented pixels (BoundaryPlaneBuilder), leaving out
+//      the side where the arm leaves.
+//
+// Units: metres, camera frame x right, y down, z forward. Nothing is allocated per frame
+// once a CloudFrame has seen one frame of the pipeline's size.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "dynahand/boundary_planes.h"
+#include "dynahand/core.h"
+#include "dynahand/depth_frame.h"
+#include "dynahand/voxel_grid.h"
+
+namespace dynahand {
+
+struct DepthFilterConfig {
+  float minDepthM = 0.15f;  // range gate: nearer samples are dropped (m)
+  float maxDepthM = 2.0f;   // range gate: farther samples are dropped (m)
+  bool median = true;       // 3x3 median (OpenCV), removes speckle and fills 1-pixel holes
+  // Bilateral smoothing (OpenCV, float, 5x5 window). Off by default: it costs about
+  // 1 ms per 100k filtered pixels here, and the voxel centroids already average
+  // ~10-30 pixels each. Its sigmas below.
+  bool bilateral = false;
+  float bilateralSigmaDepthM = 0.01f;  // range sigma (m)
+  float bilateralSigmaPixels = 2.0f;   // spatial sigma (pixels)
+  bool removeFlyingPixels = true;      // drop pixels cut off from both sides (see below)
+};
+
+// Two neighbouring samples belong to one surface when their depth step is at most
+// jumpM + slope * lateral spacing, the spacing being z * step / f (m). Scaling with
+// the spacing makes the rule the same at any resolution and distance.
+struct DepthStepRule {
+  float jumpM = 0.01f;  // step allowed on a fronto-parallel surface (noise), m
+  float slope = 3.0f;   // extra step per metre of lateral spacing (surfaces up to ~72 deg)
+};
+
+struct SegmentationConfig {
+  DepthStepRule step;
+  float handRadiusM = 0.18f;  // region kept within this distance of its nearest point (m)
+  float minAreaM2 = 0.003f;   // smaller regions are noise: skip to the next nearest (m^2)
+  int maxSeedAttempts = 16;   // nearest-first candidates tried before giving up
+  int coarseStep = 0;         // coarse search stride (pixels); 0 = width / 160, >= 1
+  // A volume reaching within this many pixels of the image border continues out of
+  // view: usually the body or the other arm cut by the frame (a hand held up to the
+  // camera is seen whole). It is taken only when no volume clear of the border starts
+  // within borderPreferenceDepthM behind it. 0 = no preference.
+  int borderMarginPixels = 8;
+  float borderPreferenceDepthM = 0.1f;
+  // Two-hand use: also take the next nearest region when its nearest point is within
+  // this depth (m) behind the first one's. 0 = one region only.
+  float secondRegionDepthBandM = 0.0f;
+};
+
+struct CloudConfig {
+  DepthFilterConfig filter;
+  SegmentationConfig segmentation;
+  float voxelSizeM = 0.005f;  // voxel edge (m)
+  int maxVoxels = 16384;      // per frame; extra points are dropped and counted
+  BoundaryPlaneConfig planes;
+  float planeMarginPixels = 0.5f;  // boundary planes clear the pixel footprint by this much
+};
+
+// An axis-aligned pixel box, half-open: x0 <= u < x1, y0 <= v < y1.
+struct PixelBox {
+  int x0 = 0;
+  int y0 = 0;
+  int x1 = 0;
+  int y1 = 0;
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  bool contains(int u, int v) const { return u >= x0 && u < x1 && v >= y0 && v < y1; }
+};
+
+// What segmentation found.
+struct Segment {
+  bool found = false;
+  int pixelCount = 0;                // segmented pixels
+  float areaM2 = 0.0f;               // their surface area as seen by the camera, m^2
+  Vec3 nearestPoint = Vec3::Zero();  // centre of the hand-sized ball, m
+  Vec3 centroid = Vec3::Zero();      // mean of the segmented points, m
+  // Where the region was cut at the hand radius (the arm), as a unit vector from the
+  // centroid toward the cut; zero when nothing was cut.
+  Vec3 armDirection = Vec3::Zero();
+  Vec2 armDirectionImage = Vec2::Zero();  // the same in the image (pixels, unit)
+  int cutPixelCount = 0;                  // connected pixels beyond the radius
+  int regionCount = 0;                    // 1, or 2 with secondRegionDepthBandM
+};
+
+// The per-frame output. Reused across frames (buffers keep their capacity).
+struct CloudFrame {
+  Intrinsics intrinsics;
+  float depthScale = 0.0f;  // m per raw unit of the source frame
+
+  // Raw depth copy (height x width), used outside the filtered box.
+  std::vector<std::uint16_t> rawDepth;
+  // Filtered depth inside filterBox (filterBox.height() x filterBox.width()), m, 0 = none.
+  PixelBox filterBox;
+  std::vector<float> filteredDepthM;
+  // Segmentation mask (height x width): 1 = segmented. Only segmentBox can be non-zero.
+  std::vector<std::uint8_t> mask;
+  PixelBox segmentBox;
+  Segment segment;
+
+  // The voxel cloud, parallel arrays (pointCount):
+  std::vector<Vec3> points;               // voxel centroids, m, camera frame
+  std::vector<int> pointWeights;          // pixels averaged into each point
+  std::vector<std::int32_t> pointPixels;  // pixel index v * width + u of the centroid's projection
+  int droppedPoints = 0;                  // segmented pixels lost to a full voxel table
+
+  std::vector<BoundaryPlane> planes;  // contain every point (and every segmented pixel)
+
+  std::size_t pointCount() const { return points.size(); }
+
+  // Best depth estimate (m) at pixel (u, v): filtered inside filterBox, range-gated raw
+  // elsewhere; 0 = no data (also outside the image).
+  float depthAt(int u, int v) const;
+
+  // Free-space query for the occlusion error: true when the camera ray to p is
+  // observed empty up to p, i.e. p projects into the image onto a pixel with no data or
+  // a depth farther than p.z + toleranceM. Points behind the camera or outside the
+  // image are unknown: false.
+  bool isFree(const Vec3& p, float toleranceM = 0.0f) const;
+
+ private:
+  friend class CloudPipeline;
+  float minDepthM_ = 0.0f;
+  float maxDepthM_ = 0.0f;
+};
+
+class CloudPipeline {
+ public:
+  // intrinsics must be valid (positive size and focal lengths); config values positive
+  // where they say so (asserted).
+  CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& config = {});
+  ~CloudPipeline();
+  CloudPipeline(CloudPipeline&&) noexcept;
+  CloudPipeline& operator=(CloudPipeline&&) noexcept;
+  CloudPipeline(const CloudPipeline&) = delete;
+  CloudPipeline& operator=(const CloudPipeline&) = delete;
+
+  // Fills `out` from one frame. An error (frame size differs from the intrinsics,
+  // non-positive depth scale, buffer size wrong) leaves `out` empty. A frame with no
+  // hand (e.g. all zeros) is not an error: out.segment.found is false, no points.
+  Status process(const DepthFrame& frame, CloudFrame& out);
+
+  const Intrinsics& intrinsics() const;
+  const CloudConfig& config() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dynahand

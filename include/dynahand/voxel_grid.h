@@ -1,0 +1,68 @@
+// Voxel-grid subsampling (paper: "Sampling from a Depth Sensor"): one point per
+// occupied voxel, at the centroid of the points that fell into it.
+//
+// Linear time: a fixed-capacity open-addressing hash table keyed by the integer
+// voxel coordinates (voxels are aligned to the camera origin). Slots carry a
+// generation stamp, so clearing between frames is O(1) and nothing is allocated
+// after construction. Output order is the order in which voxels were first hit,
+// so a fixed input order gives a fixed output order (deterministic).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "dynahand/core.h"
+
+namespace dynahand {
+
+class VoxelGrid {
+ public:
+  // voxelSizeM > 0: voxel edge, m. maxVoxels > 0: occupied voxels per frame; a point
+  // that would open voxel maxVoxels + 1 is dropped and counted in droppedPoints().
+  VoxelGrid(float voxelSizeM, int maxVoxels);
+
+  // Forgets all voxels (O(1)).
+  void clear();
+
+  // Adds one point (m). tag is carried along for the first point of each voxel (the
+  // pipeline passes the source pixel index). Returns false when dropped: voxel table
+  // full, non-finite point, or a coordinate beyond +-kMaxAbsCoordinate voxels.
+  bool add(const Vec3& point, std::int32_t tag = -1);
+
+  int voxelCount() const { return voxelCount_; }
+  int droppedPoints() const { return droppedPoints_; }
+  float voxelSize() const { return voxelSize_; }
+  int maxVoxels() const { return maxVoxels_; }
+
+  // Centroid (m) of voxel i in first-hit order, 0 <= i < voxelCount().
+  Vec3 centroid(int i) const;
+  // Number of points that fell into voxel i.
+  int count(int i) const { return count_[static_cast<std::size_t>(i)]; }
+  // Tag of the first point of voxel i.
+  std::int32_t firstTag(int i) const { return firstTag_[static_cast<std::size_t>(i)]; }
+
+  // Voxel coordinates are kept within +-2^20 so a key packs into 63 bits.
+  static constexpr std::int32_t kMaxAbsCoordinate = (1 << 20) - 1;
+
+ private:
+  float voxelSize_;
+  float inverseVoxelSize_;
+  int maxVoxels_;
+  std::uint32_t slotMask_;
+  std::uint32_t stamp_ = 1;
+  int voxelCount_ = 0;
+  int droppedPoints_ = 0;
+  // Hash table, (slotCount): packed key, stamp of the frame that wrote it, voxel index.
+  std::vector<std::uint64_t> slotKey_;
+  std::vector<std::uint32_t> slotStamp_;
+  std::vector<std::int32_t> slotVoxel_;
+  // Per voxel, (maxVoxels): coordinate sums relative to the voxel's lower corner (m),
+  // kept small so float sums stay accurate; the corner; point count; first tag.
+  std::vector<Vec3> sum_;
+  std::vector<Vec3> corner_;
+  std::vector<int> count_;
+  std::vector<std::int32_t> firstTag_;
+};
+
+}  // namespace dynahand

@@ -1,0 +1,422 @@
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <string>
+
+#include "cloud/depth_filter.h"
+#include "cloud/region_grow.h"
+#include "dynahand/cloud.h"
+
+namespace dynahand {
+
+using cloud::CellLabel;
+using cloud::DepthGrid;
+using cloud::GrownRegion;
+
+namespace {
+
+constexpr float kCoarseRadiusFactor = 1.25f;
+constexpr int kMaxBoxRetries = 2;
+
+template <int N>
+Eigen::Matrix<float, N, 1> normalisedOrZero(const Eigen::Matrix<float, N, 1>& v) {
+  const float n = v.norm();
+  return n > 0.0f ? Eigen::Matrix<float, N, 1>(v / n) : Eigen::Matrix<float, N, 1>::Zero();
+}
+
+}  // namespace
+
+struct CloudPipeline::Impl {
+  Intrinsics k;
+  CloudConfig config;
+  int coarseStep = 1;
+  VoxelGrid voxels;
+  BoundaryPlaneBuilder planeBuilder;
+  cloud::FilterScratch filterScratch;
+  cloud::RegionGrower coarseGrower;
+  cloud::RegionGrower fineGrower;
+  std::vector<float> coarseDepth;         // (coarse height x coarse width), m
+  std::vector<std::uint8_t> coarseNear;   // coarse labels dilated by one cell
+  std::vector<std::uint8_t> fineAllowed;  // (box) coarse region label of each pixel's cell
+  std::vector<Vec2> hullPoints;           // row extremes of the segment, normalised image plane
+
+  Impl(const Intrinsics& intrinsics, const CloudConfig& cfg)
+      : k(intrinsics), config(cfg), voxels(cfg.voxelSizeM, cfg.maxVoxels) {}
+
+  void sampleCoarse(const DepthFrame& frame, DepthGrid& grid);
+  // True when the coarse region's cell box reaches within borderMarginPixels of the
+  // image border.
+  bool atBorder(const DepthGrid& grid, const GrownRegion& r) const {
+    const int margin = config.segmentation.borderMarginPixels;
+    if (margin <= 0) return false;
+    return grid.originU + r.minI * grid.step < margin ||
+           grid.originV + r.minJ * grid.step < margin ||
+           grid.originU + r.maxI * grid.step >= k.width - margin ||
+           grid.originV + r.maxJ * grid.step >= k.height - margin;
+  }
+  Status run(const DepthFrame& frame, CloudFrame& out);
+};
+
+CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& config)
+    : impl_(std::make_unique<Impl>(intrinsics, config)) {
+  assert(intrinsics.width > 0 && intrinsics.height > 0 && intrinsics.fx > 0.0f &&
+         intrinsics.fy > 0.0f && "intrinsics must be valid");
+  const SegmentationConfig& s = config.segmentation;
+  assert(s.handRadiusM > 0.0f && s.minAreaM2 >= 0.0f && s.maxSeedAttempts > 0 && s.coarseStep >= 0);
+  assert(config.filter.minDepthM < config.filter.maxDepthM);
+  impl_->coarseStep = s.coarseStep > 0 ? s.coarseStep : std::max(1, intrinsics.width / 160);
+  const auto pixels = static_cast<std::size_t>(intrinsics.width) * intrinsics.height;
+  const auto coarseCells = static_cast<std::size_t>(intrinsics.width / impl_->coarseStep + 1) *
+                           static_cast<std::size_t>(intrinsics.height / impl_->coarseStep + 1);
+  impl_->filterScratch.reserve(pixels);
+  impl_->coarseGrower.reserve(coarseCells);
+  impl_->fineGrower.reserve(pixels);
+  impl_->coarseDepth.reserve(coarseCells);
+  impl_->coarseNear.reserve(coarseCells);
+  impl_->fineAllowed.reserve(pixels);
+  impl_->hullPoints.reserve(2 * static_cast<std::size_t>(intrinsics.height));
+}
+
+CloudPipeline::~CloudPipeline() = default;
+CloudPipeline::CloudPipeline(CloudPipeline&&) noexcept = default;
+CloudPipeline& CloudPipeline::operator=(CloudPipeline&&) noexcept = default;
+
+const Intrinsics& CloudPipeline::intrinsics() const {
+  return impl_->k;
+}
+const CloudConfig& CloudPipeline::config() const {
+  return impl_->config;
+}
+
+Status CloudPipeline::process(const DepthFrame& frame, CloudFrame& out) {
+  const Intrinsics& k = impl_->k;
+  out.points.clear();
+  out.pointWeights.clear();
+  out.pointPixels.clear();
+  out.planes.clear();
+  out.segment = {};
+  out.droppedPoints = 0;
+  out.filterBox = {};
+  out.filteredDepthM.clear();
+  // Only last frame's segment box can hold mask bits.
+  const int lastWidth = out.intrinsics.width;
+  for (int v = out.segmentBox.y0; v < out.segmentBox.y1; ++v) {
+    auto row = out.mask.begin() + static_cast<std::ptrdiff_t>(v) * lastWidth;
+    std::fill(row + out.segmentBox.x0, row + out.segmentBox.x1, std::uint8_t{0});
+  }
+  out.segmentBox = {};
+  if (frame.width != k.width || frame.height != k.height) {
+    return Error{"depth frame is " + std::to_string(frame.width) + " x " +
+                 std::to_string(frame.height) + " but the camera intrinsics are " +
+                 std::to_string(k.width) + " x " + std::to_string(k.height)};
+  }
+  const auto pixels = static_cast<std::size_t>(k.width) * k.height;
+  if (frame.depth.size() != pixels) {
+    return Error{"depth frame holds " + std::to_string(frame.depth.size()) + " values, expected " +
+                 std::to_string(k.width) + " x " + std::to_string(k.height) + " = " +
+                 std::to_string(pixels)};
+  }
+  if (!std::isfinite(frame.depthScale) || frame.depthScale <= 0.0f) {
+    return Error{"depth scale " + std::to_string(frame.depthScale) +
+                 " is not a positive number of metres per unit"};
+  }
+  return impl_->run(frame, out);
+}
+
+void CloudPipeline::Impl::sampleCoarse(const DepthFrame& frame, DepthGrid& grid) {
+  const int step = coarseStep;
+  grid.step = step;
+  grid.originU = step / 2;
+  grid.originV = step / 2;
+  grid.width = (k.width - grid.originU + step - 1) / step;
+  grid.height = (k.height - grid.originV + step - 1) / step;
+  coarseDepth.resize(static_cast<std::size_t>(grid.width) * grid.height);
+  const float scale = frame.depthScale;
+  const float lo = config.filter.minDepthM;
+  const float hi = config.filter.maxDepthM;
+  for (int j = 0; j < grid.height; ++j) {
+    const std::uint16_t* src =
+        frame.depth.data() + static_cast<std::size_t>(grid.originV + j * step) * k.width;
+    float* dst = coarseDepth.data() + static_cast<std::size_t>(j) * grid.width;
+    for (int i = 0; i < grid.width; ++i) {
+      const float z = static_cast<float>(src[grid.originU + i * step]) * scale;
+      dst[i] = z >= lo && z <= hi ? z : 0.0f;
+    }
+  }
+  grid.depth = coarseDepth.data();
+}
+
+Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
+  const SegmentationConfig& seg = config.segmentation;
+  const auto pixels = static_cast<std::size_t>(k.width) * k.height;
+  // --- output buffers (allocated on the first frame only) ---
+  out.intrinsics = k;
+  out.depthScale = frame.depthScale;
+  out.minDepthM_ = config.filter.minDepthM;
+  out.maxDepthM_ = config.filter.maxDepthM;
+  out.rawDepth.assign(frame.depth.begin(), frame.depth.end());
+  if (out.mask.size() != pixels) out.mask.assign(pixels, 0);
+  out.filteredDepthM.reserve(pixels);
+  out.points.reserve(static_cast<std::size_t>(config.maxVoxels));
+  out.pointWeights.reserve(static_cast<std::size_t>(config.maxVoxels));
+  out.pointPixels.reserve(static_cast<std::size_t>(config.maxVoxels));
+  out.planes.reserve(static_cast<std::size_t>(config.planes.planeCount));
+
+  // --- 1. coarse search for the closest, sufficiently large volume ---
+  DepthGrid coarse;
+  sampleCoarse(frame, coarse);
+  coarseGrower.reset(coarse, k);
+  // The coarse ball is wider than the hand radius: the full-resolution nearest point
+  // (the final ball's centre) differs from the coarse one by up to a few cm, and the
+  // filter box must hold the whole final region.
+  const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
+  int regionCount = 0;
+  GrownRegion first;
+  // Nearest-first; a candidate at the image border is remembered and passed over (see
+  // SegmentationConfig::borderMarginPixels), and used when nothing better follows.
+  int borderSeed = -1;
+  float borderDepth = 0.0f;
+  int attempts = 0;
+  while (regionCount == 0 && attempts++ < seg.maxSeedAttempts) {
+    const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
+    const int seed = coarseGrower.nearestFreeCell(depthLimit);
+    if (seed < 0) break;
+    const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
+    if (r.areaM2 < seg.minAreaM2) {
+      coarseGrower.reject();
+      continue;
+    }
+    if (borderSeed < 0 && atBorder(coarse, r)) {
+      borderSeed = seed;
+      borderDepth = r.nearestPoint.z();
+      coarseGrower.reject();
+      continue;
+    }
+    coarseGrower.accept(cloud::kRegion1);
+    first = r;
+    regionCount = 1;
+  }
+  if (regionCount == 0 && borderSeed >= 0) {
+    coarseGrower.reset(coarse, k);  // forget the passed-over labels
+    first = coarseGrower.grow(borderSeed, seg.step, coarseRadius);
+    coarseGrower.accept(cloud::kRegion1);
+    regionCount = 1;
+  }
+  if (regionCount == 0) return Ok{};  // no hand: valid, empty
+  int minI = first.minI, maxI = first.maxI, minJ = first.minJ, maxJ = first.maxJ;
+  if (seg.secondRegionDepthBandM > 0.0f) {
+    attempts = 0;
+    while (regionCount == 1 && attempts++ < seg.maxSeedAttempts) {
+      const int seed = coarseGrower.nearestFreeCell(
+          first.nearestPoint.z() + seg.secondRegionDepthBandM, &first.nearestPoint, coarseRadius);
+      if (seed < 0) break;
+      const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
+      if (r.areaM2 >= seg.minAreaM2 && !r.touchesEarlierRegion) {
+        coarseGrower.accept(cloud::kRegion2);
+        regionCount = 2;
+        minI = std::min(minI, r.minI);
+        maxI = std::max(maxI, r.maxI);
+        minJ = std::min(minJ, r.minJ);
+        maxJ = std::max(maxJ, r.maxJ);
+      } else {
+        coarseGrower.reject();
+      }
+    }
+  }
+
+  // --- 2. filter only the box around the coarse regions ---
+  // Margin: a coarse cell covers step pixels; the median and flying-pixel tests need one
+  // more pixel each.
+  const int step = coarse.step;
+  const int margin = 2 * step + 2;
+  PixelBox box;
+  box.x0 = std::max(0, coarse.originU + minI * step - margin);
+  box.y0 = std::max(0, coarse.originV + minJ * step - margin);
+  box.x1 = std::min(k.width, coarse.originU + maxI * step + margin + 1);
+  box.y1 = std::min(k.height, coarse.originV + maxJ * step + margin + 1);
+
+  // --- 3. full-resolution segmentation, seeded inside each coarse region ---
+  // Each pixel is allowed to seed region r when its coarse cell or a neighbouring cell
+  // belongs to r (cells are sampled at their centre, so edges may disagree).
+  const std::vector<std::uint8_t>& coarseLabels = coarseGrower.labels();
+  coarseNear.assign(coarseLabels.size(), 0);
+  for (int j = 0; j < coarse.height; ++j) {
+    for (int i = 0; i < coarse.width; ++i) {
+      const std::uint8_t label = coarseLabels[static_cast<std::size_t>(j) * coarse.width + i];
+      if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
+      for (int dj = std::max(0, j - 1); dj <= std::min(coarse.height - 1, j + 1); ++dj) {
+        for (int di = std::max(0, i - 1); di <= std::min(coarse.width - 1, i + 1); ++di) {
+          std::uint8_t& near = coarseNear[static_cast<std::size_t>(dj) * coarse.width + di];
+          if (near == 0) near = label;
+        }
+      }
+    }
+  }
+  // Filtering and growing run on the box; a region that reaches a box edge (not an
+  // image edge) was cut by the box, so the box is widened and the pass repeated.
+  GrownRegion fineRegion[2];
+  bool fineFound[2] = {false, false};
+  for (int pass = 0;; ++pass) {
+    out.filterBox = box;
+    cloud::filterBox(frame, box, config.filter, seg.step, k.fx, k.fy, filterScratch,
+                     out.filteredDepthM);
+
+    const int bw = box.width();
+    const int bh = box.height();
+    fineAllowed.resize(static_cast<std::size_t>(bw) * bh);
+    for (int v = 0; v < bh; ++v) {
+      const int j = std::min(coarse.height - 1, (box.y0 + v) / step);
+      const std::uint8_t* nearRow = coarseNear.data() + static_cast<std::size_t>(j) * coarse.width;
+      std::uint8_t* dst = fineAllowed.data() + static_cast<std::size_t>(v) * bw;
+      for (int u = 0; u < bw; ++u)
+        dst[u] = nearRow[std::min(coarse.width - 1, (box.x0 + u) / step)];
+    }
+
+    DepthGrid fine;
+    fine.depth = out.filteredDepthM.data();
+    fine.width = bw;
+    fine.height = bh;
+    fine.originU = box.x0;
+    fine.originV = box.y0;
+    fine.step = 1;
+    fineGrower.reset(fine, k);
+    fineFound[0] = fineFound[1] = false;
+    // The coarse pass accepted these volumes; at full resolution a filtered speck may still
+    // be nearest, so small regions are skipped the same way (half the area: edges erode).
+    for (int r = 0; r < regionCount; ++r) {
+      const auto label = static_cast<std::uint8_t>(r == 0 ? cloud::kRegion1 : cloud::kRegion2);
+      attempts = 0;
+      while (!fineFound[r] && attempts++ < seg.maxSeedAttempts) {
+        const int seed = fineGrower.nearestFreeCellIn(fineAllowed, label);
+        if (seed < 0) break;
+        const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM);
+        if (g.areaM2 >= 0.5f * seg.minAreaM2) {
+          fineGrower.accept(static_cast<CellLabel>(label));
+          fineRegion[r] = g;
+          fineFound[r] = true;
+        } else {
+          fineGrower.reject();
+        }
+      }
+    }
+    if (pass == kMaxBoxRetries || !fineFound[0]) break;
+    const int extra = std::max(box.width(), box.height()) / 2;
+    PixelBox wider = box;
+    for (int r = 0; r < 2; ++r) {
+      if (!fineFound[r]) continue;
+      const GrownRegion& g = fineRegion[r];
+      if (g.minI == 0 && box.x0 > 0) wider.x0 = std::max(0, box.x0 - extra);
+      if (g.minJ == 0 && box.y0 > 0) wider.y0 = std::max(0, box.y0 - extra);
+      if (g.maxI == bw - 1 && box.x1 < k.width) wider.x1 = std::min(k.width, box.x1 + extra);
+      if (g.maxJ == bh - 1 && box.y1 < k.height) wider.y1 = std::min(k.height, box.y1 + extra);
+    }
+    if (wider.x0 == box.x0 && wider.y0 == box.y0 && wider.x1 == box.x1 && wider.y1 == box.y1) {
+      break;
+    }
+    box = wider;
+  }
+  if (!fineFound[0]) return Ok{};
+  const int bw = box.width();
+  const int bh = box.height();
+
+  // --- 4. mask, voxel grid and hull points in one scan (row-major: deterministic) ---
+  voxels.clear();
+  hullPoints.clear();
+  const std::vector<std::uint8_t>& fineLabels = fineGrower.labels();
+  const float invFx = 1.0f / k.fx;
+  const float invFy = 1.0f / k.fy;
+  PixelBox segBox{k.width, k.height, 0, 0};
+  for (int v = 0; v < bh; ++v) {
+    const int pv = box.y0 + v;
+    const std::uint8_t* labelRow = fineLabels.data() + static_cast<std::size_t>(v) * bw;
+    const float* depthRow = out.filteredDepthM.data() + static_cast<std::size_t>(v) * bw;
+    std::uint8_t* maskRow = out.mask.data() + static_cast<std::size_t>(pv) * k.width;
+    const float ny = (static_cast<float>(pv) - k.cy) * invFy;
+    int rowMin = -1;
+    int rowMax = -1;
+    for (int u = 0; u < bw; ++u) {
+      const std::uint8_t label = labelRow[u];
+      if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
+      const int pu = box.x0 + u;
+      const float z = depthRow[u];
+      const float nx = (static_cast<float>(pu) - k.cx) * invFx;
+      voxels.add(Vec3(nx * z, ny * z, z), pv * k.width + pu);
+      maskRow[pu] = 1;
+      if (rowMin < 0) rowMin = pu;
+      rowMax = pu;
+    }
+    if (rowMin < 0) continue;
+    hullPoints.emplace_back((static_cast<float>(rowMin) - k.cx) * invFx, ny);
+    if (rowMax != rowMin) hullPoints.emplace_back((static_cast<float>(rowMax) - k.cx) * invFx, ny);
+    segBox.x0 = std::min(segBox.x0, rowMin);
+    segBox.x1 = std::max(segBox.x1, rowMax + 1);
+    segBox.y0 = std::min(segBox.y0, pv);
+    segBox.y1 = pv + 1;
+  }
+  out.segmentBox = segBox;
+  out.droppedPoints = voxels.droppedPoints();
+  const int voxelCount = voxels.voxelCount();
+  for (int i = 0; i < voxelCount; ++i) {
+    const Vec3 c = voxels.centroid(i);
+    out.points.push_back(c);
+    out.pointWeights.push_back(voxels.count(i));
+    const Vec2 pixel = k.project(c);
+    const int pu = std::clamp(static_cast<int>(std::lround(pixel.x())), 0, k.width - 1);
+    const int pv = std::clamp(static_cast<int>(std::lround(pixel.y())), 0, k.height - 1);
+    out.pointPixels.push_back(pv * k.width + pu);
+  }
+
+  // --- 5. segment summary; the arm is where region 1 was cut at the hand radius ---
+  Segment& s = out.segment;
+  s.found = true;
+  s.regionCount = fineFound[1] ? 2 : 1;
+  s.nearestPoint = fineRegion[0].nearestPoint;
+  Vec3 pointSum = fineRegion[0].pointSum;
+  s.pixelCount = fineRegion[0].cellCount;
+  s.areaM2 = fineRegion[0].areaM2;
+  if (fineFound[1]) {
+    pointSum += fineRegion[1].pointSum;
+    s.pixelCount += fineRegion[1].cellCount;
+    s.areaM2 += fineRegion[1].areaM2;
+  }
+  s.centroid = pointSum / static_cast<float>(s.pixelCount);
+  const GrownRegion& hand = fineRegion[0];
+  s.cutPixelCount = hand.cutCount;
+  if (hand.cutCount > 0) {
+    const auto cuts = static_cast<float>(hand.cutCount);
+    const auto cells = static_cast<float>(hand.cellCount);
+    s.armDirection = normalisedOrZero<3>(hand.cutPointSum / cuts - hand.pointSum / cells);
+    s.armDirectionImage = normalisedOrZero<2>(hand.cutPixelSum / cuts - hand.pixelSum / cells);
+  }
+
+  // --- 6. boundary planes around the segmented pixels ---
+  BoundaryPlaneConfig planeConfig = config.planes;
+  planeConfig.margin += config.planeMarginPixels / std::min(k.fx, k.fy);
+  const Vec2 armInPlane(s.armDirectionImage.x() * invFx, s.armDirectionImage.y() * invFy);
+  planeBuilder.build(hullPoints, planeConfig, armInPlane, out.planes);
+  return Ok{};
+}
+
+float CloudFrame::depthAt(int u, int v) const {
+  if (u < 0 || v < 0 || u >= intrinsics.width || v >= intrinsics.height) return 0.0f;
+  if (filterBox.contains(u, v)) {
+    return filteredDepthM[static_cast<std::size_t>(v - filterBox.y0) * filterBox.width() +
+                          static_cast<std::size_t>(u - filterBox.x0)];
+  }
+  const float z =
+      static_cast<float>(
+          rawDepth[static_cast<std::size_t>(v) * intrinsics.width + static_cast<std::size_t>(u)]) *
+      depthScale;
+  return z >= minDepthM_ && z <= maxDepthM_ ? z : 0.0f;
+}
+
+bool CloudFrame::isFree(const Vec3& p, float toleranceM) const {
+  if (!(p.z() > 0.0f) || rawDepth.empty()) return false;
+  const Vec2 pixel = intrinsics.project(p);
+  if (!intrinsics.contains(pixel.x(), pixel.y())) return false;
+  const float z =
+      depthAt(static_cast<int>(std::lround(pixel.x())), static_cast<int>(std::lround(pixel.y())));
+  return z == 0.0f || z > p.z() + toleranceM;
+}
+
+}  // namespace dynahand

@@ -1,0 +1,118 @@
+#include "cloud/depth_filter.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+namespace dynahand::cloud {
+
+void FilterScratch::reserve(std::size_t pixels) {
+  gated.reserve(pixels);
+  median.reserve(pixels);
+  metres.reserve(pixels);
+}
+
+namespace {
+
+// Raw unit range [lo, hi] that maps into [minDepthM, maxDepthM].
+std::pair<std::uint32_t, std::uint32_t> rawRange(const DepthFilterConfig& config, float scale) {
+  const double lo = std::ceil(static_cast<double>(config.minDepthM) / static_cast<double>(scale));
+  const double hi = std::floor(static_cast<double>(config.maxDepthM) / static_cast<double>(scale));
+  const auto clampRaw = [](double x) {
+    return static_cast<std::uint32_t>(std::clamp(x, 1.0, 65535.0));
+  };
+  return {clampRaw(lo), hi < 1.0 ? 0u : clampRaw(hi)};
+}
+
+// A pixel is flying when it is cut off from both neighbours of a horizontal or of a
+// vertical pair: mixed foreground/background samples at depth edges, and lone specks.
+// Neighbours outside the box are unknown and never count as a cut.
+void removeFlyingPixels(const std::vector<float>& in, int w, int h, const DepthStepRule& rule,
+                        float fx, float fy, std::vector<float>& out) {
+  const float spacingX = 1.0f / fx;
+  const float spacingY = 1.0f / fy;
+  for (int v = 0; v < h; ++v) {
+    const float* row = in.data() + static_cast<std::size_t>(v) * w;
+    const float* up = v > 0 ? row - w : nullptr;
+    const float* down = v + 1 < h ? row + w : nullptr;
+    float* dst = out.data() + static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      const float z = row[u];
+      if (z == 0.0f) {
+        dst[u] = 0.0f;
+        continue;
+      }
+      const float limitX = maxDepthStep(rule, z, spacingX);
+      const float limitY = maxDepthStep(rule, z, spacingY);
+      // An invalid neighbour (0) differs by z, a cut whenever z > limit.
+      const auto cut = [z](float n, float limit) { return std::fabs(n - z) > limit; };
+      const bool cutLeft = u > 0 && cut(row[u - 1], limitX);
+      const bool cutRight = u + 1 < w && cut(row[u + 1], limitX);
+      const bool cutUp = up && cut(up[u], limitY);
+      const bool cutDown = down && cut(down[u], limitY);
+      dst[u] = (cutLeft && cutRight) || (cutUp && cutDown) ? 0.0f : z;
+    }
+  }
+}
+
+}  // namespace
+
+void filterBox(const DepthFrame& frame, const PixelBox& box, const DepthFilterConfig& config,
+               const DepthStepRule& stepRule, float fx, float fy, FilterScratch& scratch,
+               std::vector<float>& out) {
+  assert(!box.empty() && box.x0 >= 0 && box.y0 >= 0 && box.x1 <= frame.width &&
+         box.y1 <= frame.height);
+  const int w = box.width();
+  const int h = box.height();
+  const auto n = static_cast<std::size_t>(w) * h;
+  const auto [lo, hi] = rawRange(config, frame.depthScale);
+
+  scratch.gated.resize(n);
+  for (int v = 0; v < h; ++v) {
+    const std::uint16_t* src =
+        frame.depth.data() + static_cast<std::size_t>(v + box.y0) * frame.width + box.x0;
+    std::uint16_t* dst = scratch.gated.data() + static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      const std::uint32_t d = src[u];
+      dst[u] = d >= lo && d <= hi ? static_cast<std::uint16_t>(d) : std::uint16_t{0};
+    }
+  }
+
+  const std::uint16_t* raw = scratch.gated.data();
+  if (config.median && w >= 3 && h >= 3) {
+    scratch.median.resize(n);
+    // Headers over our buffers: OpenCV writes in place, nothing is reallocated.
+    const cv::Mat src(h, w, CV_16UC1, scratch.gated.data());
+    cv::Mat dst(h, w, CV_16UC1, scratch.median.data());
+    cv::medianBlur(src, dst, 3);
+    raw = scratch.median.data();
+  }
+
+  scratch.metres.resize(n);
+  const float scale = frame.depthScale;
+  for (std::size_t i = 0; i < n; ++i) scratch.metres[i] = static_cast<float>(raw[i]) * scale;
+
+  if (config.bilateral) {
+    out.resize(n);
+    const cv::Mat src(h, w, CV_32FC1, scratch.metres.data());
+    cv::Mat dst(h, w, CV_32FC1, out.data());
+    cv::bilateralFilter(src, dst, 5, config.bilateralSigmaDepthM, config.bilateralSigmaPixels);
+    // Smoothing must not invent depth where there was none.
+    for (std::size_t i = 0; i < n; ++i) {
+      if (scratch.metres[i] == 0.0f) out[i] = 0.0f;
+    }
+    std::swap(out, scratch.metres);
+  }
+
+  out.resize(n);
+  if (config.removeFlyingPixels) {
+    removeFlyingPixels(scratch.metres, w, h, stepRule, fx, fy, out);
+  } else {
+    std::copy(scratch.metres.begin(), scratch.metres.end(), out.begin());
+  }
+}
+
+}  // namespace dynahand::cloud

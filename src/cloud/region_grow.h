@@ -1,0 +1,89 @@
+// Region growing on a depth grid (coarse samples or the filtered box): "the closest,
+// sufficiently large volume". Shared by the coarse search and the full-resolution pass.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dynahand/cloud.h"
+
+namespace dynahand::cloud {
+
+// Cell labels. kCut marks connected cells just beyond the hand radius of an accepted
+// region (where the arm leaves); kTried cells belonged to a rejected (too small) region.
+enum CellLabel : std::uint8_t {
+  kFree = 0,
+  kRegion1 = 1,
+  kRegion2 = 2,
+  kTried = 3,
+  kCut1 = 4,
+  kCut2 = 5
+};
+
+// A depth grid: cell (i, j) holds depth (m, 0 = none) of pixel
+// (originU + i * step, originV + j * step).
+struct DepthGrid {
+  const float* depth = nullptr;  // (height x width)
+  int width = 0;
+  int height = 0;
+  int originU = 0;  // pixels
+  int originV = 0;  // pixels
+  int step = 1;     // pixels between cells
+
+  Vec3 point(const Intrinsics& k, int i, int j) const {
+    const float z = depth[static_cast<std::size_t>(j) * width + i];
+    return k.deproject(static_cast<float>(originU + i * step),
+                       static_cast<float>(originV + j * step), z);
+  }
+};
+
+struct GrownRegion {
+  int cellCount = 0;
+  float areaM2 = 0.0f;  // sum of z^2 step^2 / (fx fy)
+  bool touchesEarlierRegion = false;
+  Vec3 nearestPoint = Vec3::Zero();  // the seed's point, m
+  Vec3 pointSum = Vec3::Zero();      // m
+  Vec2 pixelSum = Vec2::Zero();      // pixels (u, v)
+  int cutCount = 0;
+  Vec3 cutPointSum = Vec3::Zero();
+  Vec2 cutPixelSum = Vec2::Zero();
+  int minI = 0, minJ = 0, maxI = 0, maxJ = 0;  // inclusive cell box
+};
+
+// Grows regions nearest-first over one grid. Buffers are sized once for the largest grid.
+class RegionGrower {
+ public:
+  void reserve(std::size_t cells);
+  // Starts a new grid (seen through intrinsics k): all cells kFree.
+  void reset(const DepthGrid& grid, const Intrinsics& k);
+
+  // Index of the nearest kFree valid cell, or -1. With maxDepthM > 0 only cells up to
+  // that depth; with avoidCentre set, only cells farther than avoidRadiusM from it.
+  int nearestFreeCell(float maxDepthM = 0.0f, const Vec3* avoidCentre = nullptr,
+                      float avoidRadiusM = 0.0f) const;
+  // Nearest valid kFree cell whose `allowed` entry is non-zero (same indexing), or -1.
+  int nearestFreeCellIn(const std::vector<std::uint8_t>& allowed, std::uint8_t value) const;
+
+  // Grows from `seed` across neighbours within the step rule and radiusM of the seed's
+  // point. Cells stay unlabelled until accept() or reject().
+  GrownRegion grow(int seed, const DepthStepRule& rule, float radiusM);
+  // Labels the last grown region kRegion1/kRegion2 and its cut cells kCut1/kCut2.
+  void accept(CellLabel region);
+  // Labels the last grown region kTried (its seed is not tried again).
+  void reject();
+
+  const std::vector<std::uint8_t>& labels() const { return labels_; }
+  const DepthGrid& grid() const { return grid_; }
+
+ private:
+  DepthGrid grid_;
+  Intrinsics k_;
+  std::vector<std::uint8_t> labels_;    // (cells) CellLabel
+  std::vector<std::uint32_t> visited_;  // (cells) attempt stamp
+  std::vector<std::int32_t> queue_;     // region cells from the front, cut cells from the back
+  std::uint32_t attempt_ = 0;
+  int regionEnd_ = 0;  // queue_[0, regionEnd_) = region of the last grow
+  int cutBegin_ = 0;   // queue_[cutBegin_, cells) = its cut cells
+};
+
+}  // namespace dynahand::cloud

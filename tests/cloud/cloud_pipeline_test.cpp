@@ -1,0 +1,381 @@
+#include "dynahand/cloud.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "cloud/scenes.h"
+
+namespace dynahand {
+namespace {
+
+using cloud::scenes::Sphere;
+
+// A flat disc of spheres facing the camera (a blob of about radius + sphereRadius).
+std::vector<Sphere> disc(const Vec3& centre, float radius) {
+  std::vector<Sphere> s;
+  for (float y = -radius; y <= radius + 1e-6f; y += 0.01f) {
+    for (float x = -radius; x <= radius + 1e-6f; x += 0.01f) {
+      if (x * x + y * y <= radius * radius) s.push_back({centre + Vec3(x, y, 0.0f), 0.015f});
+    }
+  }
+  return s;
+}
+
+bool maskAt(const CloudFrame& out, const Vec3& p) {
+  const Vec2 px = out.intrinsics.project(p);
+  const int u = static_cast<int>(std::lround(px.x()));
+  const int v = static_cast<int>(std::lround(px.y()));
+  return out.mask[static_cast<std::size_t>(v) * out.intrinsics.width + u] != 0;
+}
+
+TEST(CloudPipeline, PlaneAtHalfMetreDeprojectsToHalfMetreEverywhere) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  DepthFrame frame(320, 240, 0.001f);
+  std::fill(frame.depth.begin(), frame.depth.end(), std::uint16_t{500});
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  ASSERT_GT(out.pointCount(), 100u);
+  for (const Vec3& p : out.points) EXPECT_NEAR(p.z(), 0.5f, 1e-6f);
+  int masked = 0;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      if (!out.mask[static_cast<std::size_t>(v) * k.width + u]) continue;
+      ++masked;
+      EXPECT_NEAR(out.depthAt(u, v), 0.5f, 1e-6f);
+    }
+  }
+  EXPECT_EQ(masked, out.segment.pixelCount);
+  // The region is the part of the plane within the hand radius of its nearest point.
+  const float radius = pipeline.config().segmentation.handRadiusM;
+  for (const Vec3& p : out.points) {
+    EXPECT_LE((p - out.segment.nearestPoint).norm(), radius + 1e-5f);
+  }
+  int weights = 0;
+  for (int w : out.pointWeights) weights += w;
+  EXPECT_EQ(weights, out.segment.pixelCount);
+}
+
+TEST(CloudPipeline, SegmentationPicksTheNearerOfTwoBlobs) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  for (int swap = 0; swap < 2; ++swap) {
+    const Vec3 a(0.1f, 0.0f, swap ? 0.6f : 0.5f);
+    const Vec3 b(-0.12f, 0.02f, swap ? 0.5f : 0.6f);
+    std::vector<Sphere> spheres = disc(a, 0.05f);
+    const std::vector<Sphere> other = disc(b, 0.05f);
+    spheres.insert(spheres.end(), other.begin(), other.end());
+    const DepthFrame frame = cloud::scenes::render(k, spheres, 1.0f);
+    CloudPipeline pipeline(k);
+    CloudFrame out;
+    ASSERT_TRUE(pipeline.process(frame, out).ok());
+    ASSERT_TRUE(out.segment.found);
+    const Vec3& nearer = swap ? b : a;
+    const Vec3& farther = swap ? a : b;
+    EXPECT_TRUE(maskAt(out, nearer - Vec3(0, 0, 0.015f)));
+    EXPECT_FALSE(maskAt(out, farther - Vec3(0, 0, 0.015f)));
+    for (const Vec3& p : out.points) {
+      EXPECT_LT((p - nearer).norm(), 0.08f);  // only the nearer blob, not the wall
+    }
+    EXPECT_EQ(out.segment.cutPixelCount, 0);  // nothing connected beyond the radius
+    EXPECT_EQ(out.segment.armDirection, Vec3::Zero());
+  }
+}
+
+TEST(CloudPipeline, SpecksSmallerThanTheMinimumAreaAreSkipped) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  std::vector<Sphere> spheres = disc(Vec3(0.05f, 0.0f, 0.5f), 0.05f);
+  const Vec3 speck(-0.05f, -0.05f, 0.3f);
+  spheres.push_back({speck, 0.008f});  // 2e-4 m^2, nearer than the blob
+  const DepthFrame frame = cloud::scenes::render(k, spheres, 1.0f);
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  EXPECT_GT(out.segment.nearestPoint.z(), 0.45f);
+  EXPECT_FALSE(maskAt(out, speck));
+  EXPECT_GE(out.segment.areaM2, pipeline.config().segmentation.minAreaM2);
+}
+
+TEST(CloudPipeline, RangeGateIgnoresObjectsTooClose) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  std::vector<Sphere> spheres = disc(Vec3(0.0f, 0.0f, 0.6f), 0.06f);
+  const std::vector<Sphere> tooClose = disc(Vec3(0.0f, 0.0f, 0.1f), 0.02f);
+  spheres.insert(spheres.end(), tooClose.begin(), tooClose.end());
+  const DepthFrame frame = cloud::scenes::render(k, spheres, 1.0f);
+  CloudPipeline pipeline(k);  // minDepthM 0.15
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  for (const Vec3& p : out.points) EXPECT_GT(p.z(), 0.5f);
+}
+
+TEST(CloudPipeline, ForearmIsCutAtTheHandRadiusAndItsSideHasNoPlane) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  const std::vector<Sphere> hand = cloud::scenes::handWithForearm(Vec3(0.0f, -0.03f, 0.5f), 0.35f);
+  const DepthFrame frame = cloud::scenes::render(k, hand, 1.2f);
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  const Segment& s = out.segment;
+  ASSERT_TRUE(s.found);
+  const float radius = pipeline.config().segmentation.handRadiusM;
+  const float voxelDiagonal = pipeline.config().voxelSizeM * std::sqrt(3.0f);
+  for (const Vec3& p : out.points) {
+    EXPECT_LE((p - s.nearestPoint).norm(), radius + voxelDiagonal);
+  }
+  EXPECT_GT(s.cutPixelCount, 0);
+  EXPECT_GT(s.armDirection.dot(Vec3(0.0f, 0.8f, 0.6f)), 0.8f);  // toward the elbow
+  EXPECT_GT(s.armDirectionImage.y(), 0.8f);                     // downward in the image
+  // The planes keep every side but the arm's.
+  const BoundaryPlaneConfig& pc = pipeline.config().planes;
+  EXPECT_LT(out.planes.size(), static_cast<std::size_t>(pc.planeCount));
+  for (const BoundaryPlane& plane : out.planes) {
+    EXPECT_LT(plane.imageDirection.dot(Vec2(0.0f, 1.0f)), std::cos(pc.omitHalfAngle) + 0.01f);
+  }
+}
+
+TEST(CloudPipeline, BoundaryPlanesContainEverySegmentedPixelAndPoint) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  const DepthFrame frame =
+      cloud::scenes::render(k, cloud::scenes::handWithForearm(Vec3(0.04f, 0.0f, 0.45f)), 0.9f);
+  CloudConfig config;
+  config.planes.omitHalfAngle = 0.0f;  // all sides
+  CloudPipeline pipeline(k, config);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  ASSERT_EQ(out.planes.size(), static_cast<std::size_t>(config.planes.planeCount));
+  for (const BoundaryPlane& plane : out.planes) {
+    for (const Vec3& p : out.points) EXPECT_LE(plane.signedDistance(p), 1e-6f);
+    for (int v = 0; v < k.height; ++v) {
+      for (int u = 0; u < k.width; ++u) {
+        if (!out.mask[static_cast<std::size_t>(v) * k.width + u]) continue;
+        const Vec3 p = k.deproject(static_cast<float>(u), static_cast<float>(v), out.depthAt(u, v));
+        ASSERT_LE(plane.signedDistance(p), 1e-6f) << "pixel " << u << "," << v;
+      }
+    }
+  }
+}
+
+TEST(CloudPipeline, FreeSpaceQueryAgreesWithBruteForce) {
+  const Intrinsics k = cloud::scenes::camera(160, 120);
+  // No wall: the background has no data (free), the hand occludes.
+  const DepthFrame frame =
+      cloud::scenes::render(k, cloud::scenes::handWithForearm(Vec3(0.0f, -0.02f, 0.5f)), 0.0f);
+  CloudConfig config;
+  config.filter.median = false;
+  config.filter.removeFlyingPixels = false;
+  CloudPipeline pipeline(k, config);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+
+  std::uint32_t state = 99u;
+  const auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / 16777216.0f;
+  };
+  int checked = 0;
+  int freeCount = 0;
+  for (int n = 0; n < 300; ++n) {
+    const Vec3 p((next() - 0.5f) * 0.5f, (next() - 0.5f) * 0.4f, 0.3f + 0.5f * next());
+    // Brute force: the pixel whose ray is closest in angle to p, its raw depth.
+    const Vec3 dir = p.normalized();
+    int bestU = -1;
+    int bestV = -1;
+    float bestCos = -2.0f;
+    for (int v = 0; v < k.height; ++v) {
+      for (int u = 0; u < k.width; ++u) {
+        const float c = k.ray(static_cast<float>(u), static_cast<float>(v)).dot(dir);
+        if (c > bestCos) {
+          bestCos = c;
+          bestU = u;
+          bestV = v;
+        }
+      }
+    }
+    // Skip points right on a pixel border, where rounding may pick either side.
+    const Vec2 px = k.project(p);
+    const float fu = px.x() - std::floor(px.x());
+    const float fv = px.y() - std::floor(px.y());
+    if (std::fabs(fu - 0.5f) < 0.02f || std::fabs(fv - 0.5f) < 0.02f) continue;
+    if (!k.contains(px.x(), px.y())) {
+      EXPECT_FALSE(out.isFree(p));
+      continue;
+    }
+    const float observed = frame.metres(bestU, bestV);
+    const bool expectedFree = observed == 0.0f || observed > p.z();
+    EXPECT_EQ(out.isFree(p), expectedFree) << "point " << p.transpose();
+    ++checked;
+    freeCount += expectedFree;
+  }
+  EXPECT_GT(checked, 200);
+  EXPECT_GT(freeCount, 10);
+  EXPECT_LT(freeCount, checked);
+  EXPECT_FALSE(out.isFree(Vec3(0.0f, 0.0f, -0.5f)));  // behind the camera: unknown
+}
+
+TEST(CloudPipeline, AllZeroFrameIsValidAndHasNoHand) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  const DepthFrame frame(320, 240, 0.001f);
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  const Status status = pipeline.process(frame, out);
+  ASSERT_TRUE(status.ok());
+  EXPECT_FALSE(out.segment.found);
+  EXPECT_EQ(out.pointCount(), 0u);
+  EXPECT_TRUE(out.planes.empty());
+  EXPECT_TRUE(out.isFree(Vec3(0.0f, 0.0f, 0.5f)));  // no data: free
+}
+
+TEST(CloudPipeline, FrameSizeDifferentFromIntrinsicsIsAnError) {
+  CloudPipeline pipeline(cloud::scenes::camera(320, 240));
+  CloudFrame out;
+  const Status status = pipeline.process(DepthFrame(640, 480, 0.001f), out);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("640 x 480"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("320 x 240"), std::string::npos) << status.message();
+  EXPECT_EQ(out.pointCount(), 0u);
+}
+
+TEST(CloudPipeline, DepthBufferOfWrongLengthIsAnError) {
+  CloudPipeline pipeline(cloud::scenes::camera(320, 240));
+  DepthFrame frame(320, 240, 0.001f);
+  frame.depth.resize(1000);
+  CloudFrame out;
+  const Status status = pipeline.process(frame, out);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("1000"), std::string::npos) << status.message();
+}
+
+TEST(CloudPipeline, NonPositiveDepthScaleIsAnError) {
+  CloudPipeline pipeline(cloud::scenes::camera(320, 240));
+  CloudFrame out;
+  for (float scale : {0.0f, -0.001f, std::nanf("")}) {
+    DepthFrame frame(320, 240, scale);
+    const Status status = pipeline.process(frame, out);
+    ASSERT_FALSE(status.ok()) << scale;
+    EXPECT_NE(status.message().find("depth scale"), std::string::npos) << status.message();
+  }
+}
+
+TEST(CloudPipeline, MaskFollowsTheHandBetweenFramesAndBuffersAreReused) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  const Vec3 left(-0.1f, 0.0f, 0.5f);
+  const Vec3 right(0.1f, 0.0f, 0.5f);
+  const DepthFrame a = cloud::scenes::render(k, disc(left, 0.05f), 1.0f);
+  const DepthFrame b = cloud::scenes::render(k, disc(right, 0.05f), 1.0f);
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(a, out).ok());
+  EXPECT_TRUE(maskAt(out, left));
+  const Vec3* pointsData = out.points.data();
+  const float* filteredData = out.filteredDepthM.data();
+  ASSERT_TRUE(pipeline.process(b, out).ok());
+  EXPECT_FALSE(maskAt(out, left));
+  EXPECT_TRUE(maskAt(out, right));
+  ASSERT_TRUE(pipeline.process(a, out).ok());
+  EXPECT_EQ(out.points.data(), pointsData);  // no reallocation after the first frame
+  EXPECT_EQ(out.filteredDepthM.data(), filteredData);
+}
+
+TEST(CloudPipeline, ResultsAreDeterministic) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  const DepthFrame frame =
+      cloud::scenes::render(k, cloud::scenes::handWithForearm(Vec3(0.0f, 0.0f, 0.45f)), 0.9f);
+  CloudPipeline p1(k);
+  CloudPipeline p2(k);
+  CloudFrame o1;
+  CloudFrame o2;
+  ASSERT_TRUE(p1.process(frame, o1).ok());
+  ASSERT_TRUE(p2.process(frame, o2).ok());
+  ASSERT_TRUE(p2.process(frame, o2).ok());  // a reused frame gives the same answer
+  ASSERT_EQ(o1.pointCount(), o2.pointCount());
+  Fnv1a h1;
+  Fnv1a h2;
+  for (std::size_t i = 0; i < o1.pointCount(); ++i) {
+    h1.add(o1.points[i]);
+    h2.add(o2.points[i]);
+    EXPECT_EQ(o1.pointWeights[i], o2.pointWeights[i]);
+    EXPECT_EQ(o1.pointPixels[i], o2.pointPixels[i]);
+  }
+  EXPECT_EQ(h1.value(), h2.value());
+}
+
+TEST(CloudPipeline, SecondRegionTakesTheOtherHand) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  std::vector<Sphere> spheres = disc(Vec3(-0.15f, 0.0f, 0.5f), 0.05f);
+  const std::vector<Sphere> other = disc(Vec3(0.15f, 0.0f, 0.55f), 0.05f);
+  spheres.insert(spheres.end(), other.begin(), other.end());
+  const DepthFrame frame = cloud::scenes::render(k, spheres, 1.0f);
+  CloudFrame out;
+  CloudPipeline one(k);
+  ASSERT_TRUE(one.process(frame, out).ok());
+  EXPECT_EQ(out.segment.regionCount, 1);
+  CloudConfig config;
+  config.segmentation.secondRegionDepthBandM = 0.1f;
+  CloudPipeline two(k, config);
+  ASSERT_TRUE(two.process(frame, out).ok());
+  EXPECT_EQ(out.segment.regionCount, 2);
+  EXPECT_TRUE(maskAt(out, Vec3(-0.15f, 0.0f, 0.5f)));
+  EXPECT_TRUE(maskAt(out, Vec3(0.15f, 0.0f, 0.55f)));
+}
+
+// --- filters: a two-level step edge with one column of mixed (flying) pixels ---
+DepthFrame stepEdgeFrame() {
+  DepthFrame frame(160, 120, 0.001f);
+  for (int v = 0; v < 120; ++v) {
+    for (int u = 0; u < 160; ++u) frame.at(u, v) = u < 80 ? 500 : 1000;
+    frame.at(80, v) = 750;  // halfway between: a flying pixel on every row
+  }
+  frame.at(40, 60) = 0;  // a one-pixel hole in the near surface
+  return frame;
+}
+
+TEST(CloudFilter, FlyingPixelsAtDepthEdgesAreRemoved) {
+  const Intrinsics k = cloud::scenes::camera(160, 120);
+  CloudConfig config;
+  config.filter.median = false;
+  config.segmentation.handRadiusM = 1.0f;  // filter box covers the edge
+  CloudPipeline pipeline(k, config);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(stepEdgeFrame(), out).ok());
+  ASSERT_TRUE(out.filterBox.contains(81, 60));
+  EXPECT_EQ(out.depthAt(80, 60), 0.0f);           // flying: removed
+  EXPECT_NEAR(out.depthAt(79, 60), 0.5f, 1e-6f);  // true edge of the near surface kept
+  EXPECT_NEAR(out.depthAt(81, 60), 1.0f, 1e-6f);  // and of the far surface
+  EXPECT_EQ(out.depthAt(40, 60), 0.0f);           // hole stays a hole without median
+  for (int v = 0; v < 120; ++v) EXPECT_EQ(out.mask[static_cast<std::size_t>(v) * 160 + 80], 0);
+}
+
+TEST(CloudFilter, MedianFillsOnePixelHoles) {
+  const Intrinsics k = cloud::scenes::camera(160, 120);
+  CloudConfig config;  // median on by default
+  config.segmentation.handRadiusM = 1.0f;
+  CloudPipeline pipeline(k, config);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(stepEdgeFrame(), out).ok());
+  ASSERT_TRUE(out.filterBox.contains(40, 60));
+  EXPECT_NEAR(out.depthAt(40, 60), 0.5f, 1e-6f);
+}
+
+TEST(CloudFilter, BilateralKeepsPlanesAndInventsNoDepth) {
+  const Intrinsics k = cloud::scenes::camera(160, 120);
+  CloudConfig config;
+  config.filter.median = false;
+  config.filter.bilateral = true;
+  config.segmentation.handRadiusM = 1.0f;
+  CloudPipeline pipeline(k, config);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(stepEdgeFrame(), out).ok());
+  EXPECT_NEAR(out.depthAt(30, 30), 0.5f, 1e-4f);  // flat stays flat
+  EXPECT_NEAR(out.depthAt(78, 30), 0.5f, 1e-3f);  // the edge is preserved (range sigma 1 cm)
+  EXPECT_EQ(out.depthAt(40, 60), 0.0f);           // no depth where there was none
+}
+
+}  // namespace
+}  // namespace dynahand

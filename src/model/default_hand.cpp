@@ -72,10 +72,10 @@ struct FingerShape {
 // middle finger's phalanges by Buchholz's ratios (index 0.96/0.84/0.90, ring 0.94/0.97/0.99,
 // pinky 0.74/0.69/0.86).
 constexpr std::array<FingerShape, 4> kFingers = {{
-    {"index", 0.375f, -0.02f, 0.455f, 4.0f, {0.2345f, 0.130f, 0.117f}, 0.112f, -15.0f, 20.0f},
+    {"index", 0.385f, -0.02f, 0.455f, 4.0f, {0.2345f, 0.130f, 0.117f}, 0.112f, -15.0f, 20.0f},
     {"middle", 0.125f, 0.0f, 0.470f, 0.0f, {0.245f, 0.155f, 0.130f}, 0.115f, -15.0f, 15.0f},
     {"ring", -0.125f, -0.01f, 0.450f, -4.0f, {0.229f, 0.150f, 0.129f}, 0.108f, -20.0f, 12.0f},
-    {"pinky", -0.375f, -0.04f, 0.415f, -9.0f, {0.182f, 0.107f, 0.112f}, 0.095f, -30.0f, 12.0f},
+    {"pinky", -0.39f, -0.04f, 0.415f, -9.0f, {0.182f, 0.107f, 0.112f}, 0.095f, -30.0f, 12.0f},
 }};
 
 // Radius along a finger, as a fraction of its base radius, at joints 0..3 (MCP, PIP, DIP, tip).
@@ -96,6 +96,8 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   spec.metadata.handedness = Handedness::Right;
   spec.metadata.referenceLength = L;
   spec.collision.ignoreJointNeighbours = true;
+  // The thenar base sits on the wrist: the thumb metacarpal and the forearm always touch.
+  spec.collision.ignoredPairs.emplace_back("forearm", "thumb_metacarpal");
 
   auto addBody = [&](const std::string& name, std::vector<Vec3> points) {
     spec.bodies.push_back(BodySpec{name, std::move(points), std::nullopt, std::nullopt});
@@ -111,7 +113,8 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   // 0 forearm: origin at the wrist joint centre, reaching 0.5 L back toward the elbow.
   {
     std::vector<Vec3> points;
-    addRing(points, Vec3(0, 0, 0.02f * W), 0.28f * W, 0.15f * W, 16);
+    // The rounded distal end reaches past the wrist joint centre into the palm.
+    addRing(points, Vec3(0, 0, 0.12f * W), 0.24f * W, 0.12f * W, 16);
     addRing(points, Vec3(0, 0, 0.0f), 0.34f * W, 0.19f * W, 16);
     addRing(points, Vec3(0, 0, -0.5f * L), 0.40f * W, 0.25f * W, 16);
     addBody("forearm", std::move(points));
@@ -122,6 +125,7 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   for (size_t f = 0; f < 4; ++f) mcp[f] = Vec3(kFingers[f].mcpX * W, kFingers[f].mcpY * W, kFingers[f].mcpZ * L);
   {
     std::vector<Vec3> points;
+    addRing(points, Vec3(0, 0, -0.1f * W), 0.26f * W, 0.13f * W, 16);  // heel of the palm
     addRing(points, Vec3(0, 0, 0), 0.34f * W, 0.19f * W, 16);
     addRing(points, Vec3(0, -0.02f * W, 0.22f * L), 0.46f * W, 0.18f * W, 16);
     for (size_t f = 0; f < 4; ++f) {
@@ -140,7 +144,7 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   // thumb points distally, radially and slightly volar, its nail turned toward the radial
   // side, so flexion (about its x) sweeps it across the palm.
   {
-    const Vec3 cmc(0.25f * W, -0.12f * W, 0.11f * L);
+    const Vec3 cmc(0.25f * W, -0.08f * W, 0.11f * L);
     const Vec3 z = Vec3(0.52f, -0.22f, 0.82f).normalized();
     const Vec3 y = (Vec3(0.8f, 0.6f, 0.0f) - z * z.dot(Vec3(0.8f, 0.6f, 0.0f))).normalized();
     Mat3 axes;

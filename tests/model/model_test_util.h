@@ -6,7 +6,7 @@
 #include "dynahand/model.h"
 #include "dynahand/model_pose.h"
 
-namespace dynahand::model::test {
+namespace dynahand::model::fixtures {
 
 // Uniformly random angles inside every joint's limits; root at a random pose near the camera.
 inline JointAngles randomValidAngles(const ArticulatedModel& model, std::mt19937& rng) {
@@ -37,4 +37,4 @@ inline bool overlaps(const physics::ConvexShape& a, const Pose& poseA, const phy
   return false;
 }
 
-}  // namespace dynahand::model::test
+}  // namespace dynahand::model::fixtures

@@ -1,0 +1,46 @@
+// Interop with the original authors' open-source release (IntelRealSense/hand_tracking_samples,
+// Apache-2.0): their hand model (model_hand.json) and pose files (.pose). Formats are
+// described in docs/formats/model.md ("Importing the original authors' model") and
+// docs/formats/pose.md.
+#pragma once
+
+#include <filesystem>
+#include <span>
+#include <vector>
+
+#include "dynahand/model_pose.h"
+
+namespace dynahand::model {
+
+struct IntelImportOptions {
+  // Catmull-Clark subdivision levels applied to each control cage before taking the hull;
+  // their tracker used 2. The centres of mass (and so .pose conversion) depend on it.
+  int subdivisions = 2;
+};
+
+struct IntelModel {
+  ArticulatedModel model;  // 17 bodies named like makeDefaultHand's, same order
+  ModelPose restPose;      // the file's "pose", body frames
+};
+
+Result<IntelModel> importIntelModel(const std::filesystem::path& path, const IntelImportOptions& options = {});
+
+// .pose: one frame per line, per body px py pz qx qy qz qw of the body's centre-of-mass
+// frame (m, camera frame). Converted to and from body frames with the model's hull centroids.
+Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model);
+Status saveIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model,
+                      std::span<const ModelPose> poses);
+
+// One .pose line's numbers (7 per body) <-> body-frame poses.
+Result<ModelPose> intelPoseFromNumbers(std::span<const float> numbers, const ArticulatedModel& model);
+std::vector<float> intelPoseToNumbers(const ModelPose& pose, const ArticulatedModel& model);
+
+// Catmull-Clark subdivision of a closed polygon mesh (used on the control cages); returns the
+// subdivided vertices and quad faces.
+struct PolygonMesh {
+  std::vector<Vec3> vertices;
+  std::vector<std::vector<int>> faces;
+};
+PolygonMesh catmullClark(const PolygonMesh& mesh);
+
+}  // namespace dynahand::model

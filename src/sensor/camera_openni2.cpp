@@ -14,6 +14,14 @@
 namespace dynahand::sensor {
 namespace {
 
+// "Vendor Model", without stray spaces when either is empty.
+std::string deviceName(const openni::DeviceInfo& device) {
+  std::string name = std::string(device.getVendor()) + " " + device.getName();
+  while (!name.empty() && name.back() == ' ') name.pop_back();
+  while (!name.empty() && name.front() == ' ') name.erase(name.begin());
+  return name.empty() ? "OpenNI device" : name;
+}
+
 // Kinect v1 depth camera fields of view, for devices that do not report theirs.
 constexpr float kFallbackHorizontalFov = 1.0226f;  // rad, 58.6 degrees
 constexpr float kFallbackVerticalFov = 0.7959f;    // rad, 45.6 degrees
@@ -32,8 +40,7 @@ class OpenNI2Camera final : public DepthCamera {
     if (device_.open(uri.c_str()) != openni::STATUS_OK) {
       return Error{where + ": cannot open the device (" + openniError() + ")"};
     }
-    const openni::DeviceInfo& deviceInfo = device_.getDeviceInfo();
-    info_ = {"openni2", uri, std::string(deviceInfo.getVendor()) + " " + deviceInfo.getName()};
+    info_ = {"openni2", uri, deviceName(device_.getDeviceInfo())};
     if (!device_.hasSensor(openni::SENSOR_DEPTH))
       return Error{where + ": the device has no depth sensor"};
     if (stream_.create(device_, openni::SENSOR_DEPTH) != openni::STATUS_OK) {
@@ -128,8 +135,7 @@ void listOpenNI2(CameraScan& scan) {
   openni::Array<openni::DeviceInfo> devices;
   openni::OpenNI::enumerateDevices(&devices);
   for (int i = 0; i < devices.getSize(); ++i) {
-    scan.cameras.push_back({"openni2", devices[i].getUri(),
-                            std::string(devices[i].getVendor()) + " " + devices[i].getName()});
+    scan.cameras.push_back({"openni2", devices[i].getUri(), deviceName(devices[i])});
   }
 }
 

@@ -1,0 +1,25 @@
+# CTest script: 'dynahand record' from OpenNI's Dummy device writes a readable sequence.
+# -DDYNAHAND=path/to/dynahand -DOUT=scratch folder
+file(REMOVE_RECURSE ${OUT})
+execute_process(COMMAND ${DYNAHAND} record --camera openni2:Dummy --frames 5 --out ${OUT}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dynahand record failed (${rc}): ${err}")
+endif()
+foreach(f camera.json depth/000000.png depth/000004.png)
+  if(NOT EXISTS ${OUT}/${f})
+    message(FATAL_ERROR "dynahand record did not write ${OUT}/${f}")
+  endif()
+endforeach()
+if(EXISTS ${OUT}/depth/000005.png)
+  message(FATAL_ERROR "dynahand record wrote more than --frames 5")
+endif()
+file(READ ${OUT}/camera.json camera)
+if(NOT camera MATCHES "\"width\":320" OR NOT camera MATCHES "\"depth_scale\":0.001")
+  message(FATAL_ERROR "unexpected camera.json: ${camera}")
+endif()
+execute_process(COMMAND ${DYNAHAND} record --camera openni2:Dummy --frames 1 --out ${OUT} RESULT_VARIABLE rc2
+                ERROR_VARIABLE err2)
+if(NOT rc2 EQUAL 2)
+  message(FATAL_ERROR "recording over an existing sequence should exit 2, got ${rc2}: ${err2}")
+endif()

@@ -54,7 +54,7 @@ struct SegmentationConfig {
   float handRadiusM = 0.18f;  // region kept within this distance of its nearest point (m)
   float minAreaM2 = 0.003f;   // smaller regions are noise: skip to the next nearest (m^2)
   int maxSeedAttempts = 16;   // nearest-first candidates tried before giving up
-  int coarseStep = 0;         // coarse search stride (pixels); 0 = width / 160, >= 1
+  int coarseStep = 0;         // coarse search stride (pixels); 0 = width / 80, >= 1
   // A volume reaching within this many pixels of the image border continues out of
   // view: usually the body or the other arm cut by the frame (a hand held up to the
   // camera is seen whole). It is taken only when no volume clear of the border starts
@@ -70,7 +70,12 @@ struct CloudConfig {
   DepthFilterConfig filter;
   SegmentationConfig segmentation;
   float voxelSizeM = 0.005f;  // voxel edge (m)
-  int maxVoxels = 16384;      // per frame; extra points are dropped and counted
+  // Pixels between the depth samples filtered, segmented and voxelised (the working
+  // resolution). 0 = automatic: the largest stride (<= 4) whose sample spacing at the
+  // hand's depth is at most half a voxel, so every voxel still averages >= 4 samples;
+  // 2 for a hand at 0.55 m in 640x480, 1 in 320x240.
+  int sampleStride = 0;
+  int maxVoxels = 16384;  // per frame; extra points are dropped and counted
   BoundaryPlaneConfig planes;
   float planeMarginPixels = 0.5f;  // boundary planes clear the pixel footprint by this much
 };
@@ -90,7 +95,8 @@ struct PixelBox {
 // What segmentation found.
 struct Segment {
   bool found = false;
-  int pixelCount = 0;                // segmented pixels
+  int pixelCount = 0;                // segmented pixels (mask bits set)
+  int sampleCount = 0;               // segmented depth samples (about pixels / stride^2)
   float areaM2 = 0.0f;               // their surface area as seen by the camera, m^2
   Vec3 nearestPoint = Vec3::Zero();  // centre of the hand-sized ball, m
   Vec3 centroid = Vec3::Zero();      // mean of the segmented points, m
@@ -109,8 +115,12 @@ struct CloudFrame {
 
   // Raw depth copy (height x width), used outside the filtered box.
   std::vector<std::uint16_t> rawDepth;
-  // Filtered depth inside filterBox (filterBox.height() x filterBox.width()), m, 0 = none.
+  // Filtered depth samples of filterBox every filterStride pixels, m, 0 = none:
+  // (filterRows x filterColumns), sample (i, j) at pixel (x0 + i * stride, y0 + j * stride).
   PixelBox filterBox;
+  int filterStride = 1;
+  int filterColumns = 0;
+  int filterRows = 0;
   std::vector<float> filteredDepthM;
   // Segmentation mask (height x width): 1 = segmented. Only segmentBox can be non-zero.
   std::vector<std::uint8_t> mask;
@@ -119,16 +129,16 @@ struct CloudFrame {
 
   // The voxel cloud, parallel arrays (pointCount):
   std::vector<Vec3> points;               // voxel centroids, m, camera frame
-  std::vector<int> pointWeights;          // pixels averaged into each point
+  std::vector<int> pointWeights;          // depth samples averaged into each point
   std::vector<std::int32_t> pointPixels;  // pixel index v * width + u of the centroid's projection
-  int droppedPoints = 0;                  // segmented pixels lost to a full voxel table
+  int droppedPoints = 0;                  // segmented samples lost to a full voxel table
 
   std::vector<BoundaryPlane> planes;  // contain every point (and every segmented pixel)
 
   std::size_t pointCount() const { return points.size(); }
 
-  // Best depth estimate (m) at pixel (u, v): filtered inside filterBox, range-gated raw
-  // elsewhere; 0 = no data (also outside the image).
+  // Best depth estimate (m) at pixel (u, v): the filtered sample covering it inside
+  // filterBox, range-gated raw elsewhere; 0 = no data (also outside the image).
   float depthAt(int u, int v) const;
 
   // Free-space query for the occlusion error: true when the camera ray to p is

@@ -2,10 +2,11 @@
 // occupied voxel, at the centroid of the points that fell into it.
 //
 // Linear time: a fixed-capacity open-addressing hash table keyed by the integer
-// voxel coordinates (voxels are aligned to the camera origin). Slots carry a
-// generation stamp, so clearing between frames is O(1) and nothing is allocated
-// after construction. Output order is the order in which voxels were first hit,
-// so a fixed input order gives a fixed output order (deterministic).
+// voxel coordinates (voxels are aligned to the camera origin); the slot is a hash of
+// (y, z) plus x, so voxels met one after another along an image row share cache lines. Slots carry
+// a generation stamp, so clearing between frames is O(1) and nothing is allocated after
+// construction. Output order is the order in which voxels were first hit, so a fixed input order
+// gives a fixed output order (deterministic).
 #pragma once
 
 #include <cstdint>
@@ -53,10 +54,17 @@ class VoxelGrid {
   std::uint32_t stamp_ = 1;
   int voxelCount_ = 0;
   int droppedPoints_ = 0;
-  // Hash table, (slotCount): packed key, stamp of the frame that wrote it, voxel index.
-  std::vector<std::uint64_t> slotKey_;
-  std::vector<std::uint32_t> slotStamp_;
-  std::vector<std::int32_t> slotVoxel_;
+  // Hash table (slotCount): one 16-byte slot per entry, so a probe touches one cache line.
+  struct Slot {
+    std::uint64_t key = 0;    // packed voxel coordinates
+    std::uint32_t stamp = 0;  // clear() generation that wrote it; other values = empty
+    std::int32_t voxel = 0;   // index into the per-voxel arrays
+  };
+  std::vector<Slot> slots_;
+  // The last voxel hit: neighbouring pixels usually share a voxel, so most points skip
+  // the table lookup.
+  std::uint64_t lastKey_ = 0;
+  std::int32_t lastVoxel_ = -1;
   // Per voxel, (maxVoxels): coordinate sums relative to the voxel's lower corner (m),
   // kept small so float sums stay accurate; the corner; point count; first tag.
   std::vector<Vec3> sum_;

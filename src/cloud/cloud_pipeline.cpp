@@ -15,8 +15,14 @@ using cloud::GrownRegion;
 
 namespace {
 
-constexpr float kCoarseRadiusFactor = 1.25f;
+constexpr float kCoarseRadiusFactor = 1.1f;
 constexpr int kMaxBoxRetries = 2;
+constexpr int kCandidateRounds = 3;
+
+// Nearest integer for x >= -0.5 (pixel coordinates), without a libm call.
+int roundToInt(float x) {
+  return static_cast<int>(x + 0.5f);
+}
 
 template <int N>
 Eigen::Matrix<float, N, 1> normalisedOrZero(const Eigen::Matrix<float, N, 1>& v) {
@@ -35,10 +41,11 @@ struct CloudPipeline::Impl {
   cloud::FilterScratch filterScratch;
   cloud::RegionGrower coarseGrower;
   cloud::RegionGrower fineGrower;
-  std::vector<float> coarseDepth;         // (coarse height x coarse width), m
-  std::vector<std::uint8_t> coarseNear;   // coarse labels dilated by one cell
-  std::vector<std::uint8_t> fineAllowed;  // (box) coarse region label of each pixel's cell
-  std::vector<Vec2> hullPoints;           // row extremes of the segment, normalised image plane
+  std::vector<float> coarseDepth;        // (coarse height x coarse width), m
+  std::vector<std::uint8_t> coarseNear;  // coarse labels dilated by one cell
+  std::vector<int> boxColumnCell;        // (box width) coarse column of each box column
+  std::vector<int> boxRowCell;           // (box height) coarse row of each box row
+  std::vector<Vec2> hullPoints;          // row extremes of the segment, normalised image plane
 
   Impl(const Intrinsics& intrinsics, const CloudConfig& cfg)
       : k(intrinsics), config(cfg), voxels(cfg.voxelSizeM, cfg.maxVoxels) {}
@@ -64,7 +71,7 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
   const SegmentationConfig& s = config.segmentation;
   assert(s.handRadiusM > 0.0f && s.minAreaM2 >= 0.0f && s.maxSeedAttempts > 0 && s.coarseStep >= 0);
   assert(config.filter.minDepthM < config.filter.maxDepthM);
-  impl_->coarseStep = s.coarseStep > 0 ? s.coarseStep : std::max(1, intrinsics.width / 160);
+  impl_->coarseStep = s.coarseStep > 0 ? s.coarseStep : std::max(1, intrinsics.width / 80);
   const auto pixels = static_cast<std::size_t>(intrinsics.width) * intrinsics.height;
   const auto coarseCells = static_cast<std::size_t>(intrinsics.width / impl_->coarseStep + 1) *
                            static_cast<std::size_t>(intrinsics.height / impl_->coarseStep + 1);
@@ -73,7 +80,8 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
   impl_->fineGrower.reserve(pixels);
   impl_->coarseDepth.reserve(coarseCells);
   impl_->coarseNear.reserve(coarseCells);
-  impl_->fineAllowed.reserve(pixels);
+  impl_->boxColumnCell.reserve(static_cast<std::size_t>(intrinsics.width));
+  impl_->boxRowCell.reserve(static_cast<std::size_t>(intrinsics.height));
   impl_->hullPoints.reserve(2 * static_cast<std::size_t>(intrinsics.height));
 }
 
@@ -97,6 +105,9 @@ Status CloudPipeline::process(const DepthFrame& frame, CloudFrame& out) {
   out.segment = {};
   out.droppedPoints = 0;
   out.filterBox = {};
+  out.filterStride = 1;
+  out.filterColumns = 0;
+  out.filterRows = 0;
   out.filteredDepthM.clear();
   // Only last frame's segment box can hold mask bits.
   const int lastWidth = out.intrinsics.width;
@@ -166,158 +177,192 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   DepthGrid coarse;
   sampleCoarse(frame, coarse);
   coarseGrower.reset(coarse, k);
-  // The coarse ball is wider than the hand radius: the full-resolution nearest point
-  // (the final ball's centre) differs from the coarse one by up to a few cm, and the
-  // filter box must hold the whole final region.
-  const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
-  int regionCount = 0;
-  GrownRegion first;
-  // Nearest-first; a candidate at the image border is remembered and passed over (see
-  // SegmentationConfig::borderMarginPixels), and used when nothing better follows.
-  int borderSeed = -1;
-  float borderDepth = 0.0f;
-  int attempts = 0;
-  while (regionCount == 0 && attempts++ < seg.maxSeedAttempts) {
-    const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
-    const int seed = coarseGrower.nearestFreeCell(depthLimit);
-    if (seed < 0) break;
-    const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
-    if (r.areaM2 < seg.minAreaM2) {
-      coarseGrower.reject();
-      continue;
-    }
-    if (borderSeed < 0 && atBorder(coarse, r)) {
-      borderSeed = seed;
-      borderDepth = r.nearestPoint.z();
-      coarseGrower.reject();
-      continue;
-    }
-    coarseGrower.accept(cloud::kRegion1);
-    first = r;
-    regionCount = 1;
-  }
-  if (regionCount == 0 && borderSeed >= 0) {
-    coarseGrower.reset(coarse, k);  // forget the passed-over labels
-    first = coarseGrower.grow(borderSeed, seg.step, coarseRadius);
-    coarseGrower.accept(cloud::kRegion1);
-    regionCount = 1;
-  }
-  if (regionCount == 0) return Ok{};  // no hand: valid, empty
-  int minI = first.minI, maxI = first.maxI, minJ = first.minJ, maxJ = first.maxJ;
-  if (seg.secondRegionDepthBandM > 0.0f) {
-    attempts = 0;
-    while (regionCount == 1 && attempts++ < seg.maxSeedAttempts) {
-      const int seed = coarseGrower.nearestFreeCell(
-          first.nearestPoint.z() + seg.secondRegionDepthBandM, &first.nearestPoint, coarseRadius);
-      if (seed < 0) break;
-      const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
-      if (r.areaM2 >= seg.minAreaM2 && !r.touchesEarlierRegion) {
-        coarseGrower.accept(cloud::kRegion2);
-        regionCount = 2;
-        minI = std::min(minI, r.minI);
-        maxI = std::max(maxI, r.maxI);
-        minJ = std::min(minJ, r.minJ);
-        maxJ = std::max(maxJ, r.maxJ);
-      } else {
-        coarseGrower.reject();
-      }
-    }
-  }
-
-  // --- 2. filter only the box around the coarse regions ---
-  // Margin: a coarse cell covers step pixels; the median and flying-pixel tests need one
-  // more pixel each.
-  const int step = coarse.step;
-  const int margin = 2 * step + 2;
-  PixelBox box;
-  box.x0 = std::max(0, coarse.originU + minI * step - margin);
-  box.y0 = std::max(0, coarse.originV + minJ * step - margin);
-  box.x1 = std::min(k.width, coarse.originU + maxI * step + margin + 1);
-  box.y1 = std::min(k.height, coarse.originV + maxJ * step + margin + 1);
-
-  // --- 3. full-resolution segmentation, seeded inside each coarse region ---
-  // Each pixel is allowed to seed region r when its coarse cell or a neighbouring cell
-  // belongs to r (cells are sampled at their centre, so edges may disagree).
-  const std::vector<std::uint8_t>& coarseLabels = coarseGrower.labels();
-  coarseNear.assign(coarseLabels.size(), 0);
-  for (int j = 0; j < coarse.height; ++j) {
-    for (int i = 0; i < coarse.width; ++i) {
-      const std::uint8_t label = coarseLabels[static_cast<std::size_t>(j) * coarse.width + i];
-      if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
-      for (int dj = std::max(0, j - 1); dj <= std::min(coarse.height - 1, j + 1); ++dj) {
-        for (int di = std::max(0, i - 1); di <= std::min(coarse.width - 1, i + 1); ++di) {
-          std::uint8_t& near = coarseNear[static_cast<std::size_t>(dj) * coarse.width + di];
-          if (near == 0) near = label;
-        }
-      }
-    }
-  }
-  // Filtering and growing run on the box; a region that reaches a box edge (not an
-  // image edge) was cut by the box, so the box is widened and the pass repeated.
+  // A coarse volume can fail at full resolution (e.g. a speckle cluster whose coarse area
+  // was overestimated): it is retired and the search goes on with the next candidate.
   GrownRegion fineRegion[2];
   bool fineFound[2] = {false, false};
-  for (int pass = 0;; ++pass) {
-    out.filterBox = box;
-    cloud::filterBox(frame, box, config.filter, seg.step, k.fx, k.fy, filterScratch,
-                     out.filteredDepthM);
-
-    const int bw = box.width();
-    const int bh = box.height();
-    fineAllowed.resize(static_cast<std::size_t>(bw) * bh);
-    for (int v = 0; v < bh; ++v) {
-      const int j = std::min(coarse.height - 1, (box.y0 + v) / step);
-      const std::uint8_t* nearRow = coarseNear.data() + static_cast<std::size_t>(j) * coarse.width;
-      std::uint8_t* dst = fineAllowed.data() + static_cast<std::size_t>(v) * bw;
-      for (int u = 0; u < bw; ++u)
-        dst[u] = nearRow[std::min(coarse.width - 1, (box.x0 + u) / step)];
+  PixelBox box;
+  int stride = 1;
+  int regionCount = 0;
+  for (int round = 0; round < kCandidateRounds && !fineFound[0]; ++round) {
+    // The coarse ball is wider than the hand radius: the full-resolution nearest point
+    // (the final ball's centre) differs from the coarse one by up to a few cm, and the
+    // filter box must hold the whole final region.
+    const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
+    regionCount = 0;
+    GrownRegion first;
+    // Nearest-first; a candidate at the image border is remembered and passed over (see
+    // SegmentationConfig::borderMarginPixels), and used when nothing better follows.
+    int borderSeed = -1;
+    float borderDepth = 0.0f;
+    int attempts = 0;
+    while (regionCount == 0 && attempts++ < seg.maxSeedAttempts) {
+      const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
+      const int seed = coarseGrower.nearestFreeCell(depthLimit);
+      if (seed < 0) break;
+      const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
+      if (r.areaM2 < seg.minAreaM2) {
+        coarseGrower.reject();
+        continue;
+      }
+      if (borderSeed < 0 && atBorder(coarse, r)) {
+        borderSeed = seed;
+        borderDepth = r.nearestPoint.z();
+        coarseGrower.reject();
+        continue;
+      }
+      coarseGrower.accept(cloud::kRegion1);
+      first = r;
+      regionCount = 1;
     }
-
-    DepthGrid fine;
-    fine.depth = out.filteredDepthM.data();
-    fine.width = bw;
-    fine.height = bh;
-    fine.originU = box.x0;
-    fine.originV = box.y0;
-    fine.step = 1;
-    fineGrower.reset(fine, k);
-    fineFound[0] = fineFound[1] = false;
-    // The coarse pass accepted these volumes; at full resolution a filtered speck may still
-    // be nearest, so small regions are skipped the same way (half the area: edges erode).
-    for (int r = 0; r < regionCount; ++r) {
-      const auto label = static_cast<std::uint8_t>(r == 0 ? cloud::kRegion1 : cloud::kRegion2);
+    if (regionCount == 0 && borderSeed >= 0) {
+      coarseGrower.reset(coarse, k);  // forget the passed-over labels
+      first = coarseGrower.grow(borderSeed, seg.step, coarseRadius);
+      coarseGrower.accept(cloud::kRegion1);
+      regionCount = 1;
+    }
+    if (regionCount == 0) return Ok{};  // no hand: valid, empty
+    int minI = first.minI, maxI = first.maxI, minJ = first.minJ, maxJ = first.maxJ;
+    if (seg.secondRegionDepthBandM > 0.0f) {
       attempts = 0;
-      while (!fineFound[r] && attempts++ < seg.maxSeedAttempts) {
-        const int seed = fineGrower.nearestFreeCellIn(fineAllowed, label);
+      while (regionCount == 1 && attempts++ < seg.maxSeedAttempts) {
+        const int seed = coarseGrower.nearestFreeCell(
+            first.nearestPoint.z() + seg.secondRegionDepthBandM, &first.nearestPoint, coarseRadius);
         if (seed < 0) break;
-        const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM);
-        if (g.areaM2 >= 0.5f * seg.minAreaM2) {
-          fineGrower.accept(static_cast<CellLabel>(label));
-          fineRegion[r] = g;
-          fineFound[r] = true;
+        const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
+        if (r.areaM2 >= seg.minAreaM2 && !r.touchesEarlierRegion) {
+          coarseGrower.accept(cloud::kRegion2);
+          regionCount = 2;
+          minI = std::min(minI, r.minI);
+          maxI = std::max(maxI, r.maxI);
+          minJ = std::min(minJ, r.minJ);
+          maxJ = std::max(maxJ, r.maxJ);
         } else {
-          fineGrower.reject();
+          coarseGrower.reject();
         }
       }
     }
-    if (pass == kMaxBoxRetries || !fineFound[0]) break;
-    const int extra = std::max(box.width(), box.height()) / 2;
-    PixelBox wider = box;
-    for (int r = 0; r < 2; ++r) {
-      if (!fineFound[r]) continue;
-      const GrownRegion& g = fineRegion[r];
-      if (g.minI == 0 && box.x0 > 0) wider.x0 = std::max(0, box.x0 - extra);
-      if (g.minJ == 0 && box.y0 > 0) wider.y0 = std::max(0, box.y0 - extra);
-      if (g.maxI == bw - 1 && box.x1 < k.width) wider.x1 = std::min(k.width, box.x1 + extra);
-      if (g.maxJ == bh - 1 && box.y1 < k.height) wider.y1 = std::min(k.height, box.y1 + extra);
+
+    // --- 2. filter only the box around the coarse regions ---
+    // Margin: a coarse cell covers step pixels; the median and flying-pixel tests need one
+    // more pixel each.
+    const int step = coarse.step;
+    const int margin = 2 * step + 2;
+    box.x0 = std::max(0, coarse.originU + minI * step - margin);
+    box.y0 = std::max(0, coarse.originV + minJ * step - margin);
+    box.x1 = std::min(k.width, coarse.originU + maxI * step + margin + 1);
+    box.y1 = std::min(k.height, coarse.originV + maxJ * step + margin + 1);
+
+    // Working resolution: samples no closer than half a voxel at the hand's depth.
+    stride = config.sampleStride;
+    if (stride <= 0) {
+      const float pitchPerStride = first.nearestPoint.z() / std::min(k.fx, k.fy);  // m
+      stride = std::clamp(static_cast<int>(0.5f * config.voxelSizeM / pitchPerStride), 1, 4);
     }
-    if (wider.x0 == box.x0 && wider.y0 == box.y0 && wider.x1 == box.x1 && wider.y1 == box.y1) {
-      break;
+
+    // --- 3. full-resolution segmentation, seeded inside each coarse region ---
+    // With two regions, each pixel knows which coarse region its cell (or a neighbouring
+    // cell: cells are sampled at their centre, so edges may disagree) belongs to.
+    const bool twoRegions = regionCount == 2;
+    if (twoRegions) {
+      const std::vector<std::uint8_t>& coarseLabels = coarseGrower.labels();
+      coarseNear.assign(coarseLabels.size(), 0);
+      for (int j = 0; j < coarse.height; ++j) {
+        for (int i = 0; i < coarse.width; ++i) {
+          const std::uint8_t label = coarseLabels[static_cast<std::size_t>(j) * coarse.width + i];
+          if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
+          for (int dj = std::max(0, j - 1); dj <= std::min(coarse.height - 1, j + 1); ++dj) {
+            for (int di = std::max(0, i - 1); di <= std::min(coarse.width - 1, i + 1); ++di) {
+              std::uint8_t& near = coarseNear[static_cast<std::size_t>(dj) * coarse.width + di];
+              if (near == 0) near = label;
+            }
+          }
+        }
+      }
     }
-    box = wider;
+    // Filtering and growing run on the box; a region that reaches a box edge (not an
+    // image edge) was cut by the box, so the box is widened and the pass repeated.
+    for (int pass = 0;; ++pass) {
+      out.filterBox = box;
+      cloud::filterBox(frame, box, stride, config.filter, seg.step, k.fx, k.fy, filterScratch,
+                       out.filteredDepthM);
+
+      const int bw = cloud::samplesAlong(box.width(), stride);
+      const int bh = cloud::samplesAlong(box.height(), stride);
+      // Coarse cell column / row of each box column / row.
+      boxColumnCell.resize(static_cast<std::size_t>(bw));
+      boxRowCell.resize(static_cast<std::size_t>(bh));
+      for (int u = 0; u < bw; ++u) {
+        boxColumnCell[static_cast<std::size_t>(u)] =
+            std::min(coarse.width - 1, (box.x0 + u * stride) / step);
+      }
+      for (int v = 0; v < bh; ++v) {
+        boxRowCell[static_cast<std::size_t>(v)] =
+            std::min(coarse.height - 1, (box.y0 + v * stride) / step);
+      }
+
+      DepthGrid fine;
+      fine.depth = out.filteredDepthM.data();
+      fine.width = bw;
+      fine.height = bh;
+      fine.originU = box.x0;
+      fine.originV = box.y0;
+      fine.step = stride;
+      fineGrower.reset(fine, k);
+      fineFound[0] = fineFound[1] = false;
+      // The coarse pass accepted these volumes; at full resolution a filtered speck may still
+      // be nearest (e.g. a fingertip in front of the palm), so small regions are skipped too.
+      for (int r = 0; r < regionCount; ++r) {
+        const auto label = static_cast<std::uint8_t>(r == 0 ? cloud::kRegion1 : cloud::kRegion2);
+        attempts = 0;
+        while (!fineFound[r] && attempts++ < seg.maxSeedAttempts) {
+          // Region 1 may start anywhere in the box but in region 2's cells: when its coarse
+          // volume splits at full resolution (a fingertip in front of the palm), the palm
+          // beside it is still the nearest large volume. Region 2 starts in its own cells.
+          const int seed = fineGrower.nearestFreeCellWhere([&](int u, int v) {
+            if (!twoRegions) return true;
+            const std::uint8_t coarseLabel =
+                coarseNear[static_cast<std::size_t>(boxRowCell[static_cast<std::size_t>(v)]) *
+                               coarse.width +
+                           static_cast<std::size_t>(boxColumnCell[static_cast<std::size_t>(u)])];
+            return label == cloud::kRegion1 ? coarseLabel != cloud::kRegion2
+                                            : coarseLabel == cloud::kRegion2;
+          });
+          if (seed < 0) break;
+          const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM);
+          if (g.areaM2 >= seg.minAreaM2) {
+            fineGrower.accept(static_cast<CellLabel>(label));
+            fineRegion[r] = g;
+            fineFound[r] = true;
+          } else {
+            fineGrower.reject();
+          }
+        }
+      }
+      if (pass == kMaxBoxRetries || !fineFound[0]) break;
+      const int extra = std::max(box.width(), box.height()) / 2;
+      PixelBox wider = box;
+      for (int r = 0; r < 2; ++r) {
+        if (!fineFound[r]) continue;
+        const GrownRegion& g = fineRegion[r];
+        if (g.minI == 0 && box.x0 > 0) wider.x0 = std::max(0, box.x0 - extra);
+        if (g.minJ == 0 && box.y0 > 0) wider.y0 = std::max(0, box.y0 - extra);
+        if (g.maxI == bw - 1 && box.x1 < k.width) wider.x1 = std::min(k.width, box.x1 + extra);
+        if (g.maxJ == bh - 1 && box.y1 < k.height) wider.y1 = std::min(k.height, box.y1 + extra);
+      }
+      if (wider.x0 == box.x0 && wider.y0 == box.y0 && wider.x1 == box.x1 && wider.y1 == box.y1) {
+        break;
+      }
+      box = wider;
+    }
+    if (!fineFound[0]) coarseGrower.retireAccepted();
   }
   if (!fineFound[0]) return Ok{};
-  const int bw = box.width();
-  const int bh = box.height();
+  const int bw = cloud::samplesAlong(box.width(), stride);
+  const int bh = cloud::samplesAlong(box.height(), stride);
+  out.filterStride = stride;
+  out.filterColumns = bw;
+  out.filterRows = bh;
 
   // --- 4. mask, voxel grid and hull points in one scan (row-major: deterministic) ---
   voxels.clear();
@@ -325,33 +370,43 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   const std::vector<std::uint8_t>& fineLabels = fineGrower.labels();
   const float invFx = 1.0f / k.fx;
   const float invFy = 1.0f / k.fy;
+  // Each sample stands for the stride x stride pixel block around it (offset stride / 2).
+  const int blockOffset = stride / 2;
   PixelBox segBox{k.width, k.height, 0, 0};
+  int maskPixels = 0;
   for (int v = 0; v < bh; ++v) {
-    const int pv = box.y0 + v;
+    const int pv = box.y0 + v * stride;
     const std::uint8_t* labelRow = fineLabels.data() + static_cast<std::size_t>(v) * bw;
     const float* depthRow = out.filteredDepthM.data() + static_cast<std::size_t>(v) * bw;
-    std::uint8_t* maskRow = out.mask.data() + static_cast<std::size_t>(pv) * k.width;
+    const int blockV0 = std::max(0, pv - blockOffset);
+    const int blockV1 = std::min(k.height, pv - blockOffset + stride);
     const float ny = (static_cast<float>(pv) - k.cy) * invFy;
     int rowMin = -1;
     int rowMax = -1;
     for (int u = 0; u < bw; ++u) {
       const std::uint8_t label = labelRow[u];
       if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
-      const int pu = box.x0 + u;
+      const int pu = box.x0 + u * stride;
       const float z = depthRow[u];
       const float nx = (static_cast<float>(pu) - k.cx) * invFx;
       voxels.add(Vec3(nx * z, ny * z, z), pv * k.width + pu);
-      maskRow[pu] = 1;
+      const int blockU0 = std::max(0, pu - blockOffset);
+      const int blockU1 = std::min(k.width, pu - blockOffset + stride);
+      for (int mv = blockV0; mv < blockV1; ++mv) {
+        std::uint8_t* maskRow = out.mask.data() + static_cast<std::size_t>(mv) * k.width;
+        std::fill(maskRow + blockU0, maskRow + blockU1, std::uint8_t{1});
+      }
+      maskPixels += (blockV1 - blockV0) * (blockU1 - blockU0);
       if (rowMin < 0) rowMin = pu;
       rowMax = pu;
     }
     if (rowMin < 0) continue;
     hullPoints.emplace_back((static_cast<float>(rowMin) - k.cx) * invFx, ny);
     if (rowMax != rowMin) hullPoints.emplace_back((static_cast<float>(rowMax) - k.cx) * invFx, ny);
-    segBox.x0 = std::min(segBox.x0, rowMin);
-    segBox.x1 = std::max(segBox.x1, rowMax + 1);
-    segBox.y0 = std::min(segBox.y0, pv);
-    segBox.y1 = pv + 1;
+    segBox.x0 = std::min(segBox.x0, std::max(0, rowMin - blockOffset));
+    segBox.x1 = std::max(segBox.x1, std::min(k.width, rowMax - blockOffset + stride));
+    segBox.y0 = std::min(segBox.y0, blockV0);
+    segBox.y1 = blockV1;
   }
   out.segmentBox = segBox;
   out.droppedPoints = voxels.droppedPoints();
@@ -361,8 +416,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
     out.points.push_back(c);
     out.pointWeights.push_back(voxels.count(i));
     const Vec2 pixel = k.project(c);
-    const int pu = std::clamp(static_cast<int>(std::lround(pixel.x())), 0, k.width - 1);
-    const int pv = std::clamp(static_cast<int>(std::lround(pixel.y())), 0, k.height - 1);
+    const int pu = std::clamp(roundToInt(pixel.x()), 0, k.width - 1);
+    const int pv = std::clamp(roundToInt(pixel.y()), 0, k.height - 1);
     out.pointPixels.push_back(pv * k.width + pu);
   }
 
@@ -372,14 +427,15 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   s.regionCount = fineFound[1] ? 2 : 1;
   s.nearestPoint = fineRegion[0].nearestPoint;
   Vec3 pointSum = fineRegion[0].pointSum;
-  s.pixelCount = fineRegion[0].cellCount;
+  s.pixelCount = maskPixels;
+  s.sampleCount = fineRegion[0].cellCount;
   s.areaM2 = fineRegion[0].areaM2;
   if (fineFound[1]) {
     pointSum += fineRegion[1].pointSum;
-    s.pixelCount += fineRegion[1].cellCount;
+    s.sampleCount += fineRegion[1].cellCount;
     s.areaM2 += fineRegion[1].areaM2;
   }
-  s.centroid = pointSum / static_cast<float>(s.pixelCount);
+  s.centroid = pointSum / static_cast<float>(s.sampleCount);
   const GrownRegion& hand = fineRegion[0];
   s.cutPixelCount = hand.cutCount;
   if (hand.cutCount > 0) {
@@ -391,7 +447,9 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
 
   // --- 6. boundary planes around the segmented pixels ---
   BoundaryPlaneConfig planeConfig = config.planes;
-  planeConfig.margin += config.planeMarginPixels / std::min(k.fx, k.fy);
+  // The planes go through the samples; the mask blocks reach blockOffset pixels beyond.
+  planeConfig.margin +=
+      (config.planeMarginPixels + static_cast<float>(blockOffset)) / std::min(k.fx, k.fy);
   const Vec2 armInPlane(s.armDirectionImage.x() * invFx, s.armDirectionImage.y() * invFy);
   planeBuilder.build(hullPoints, planeConfig, armInPlane, out.planes);
   return Ok{};
@@ -400,8 +458,12 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
 float CloudFrame::depthAt(int u, int v) const {
   if (u < 0 || v < 0 || u >= intrinsics.width || v >= intrinsics.height) return 0.0f;
   if (filterBox.contains(u, v)) {
-    return filteredDepthM[static_cast<std::size_t>(v - filterBox.y0) * filterBox.width() +
-                          static_cast<std::size_t>(u - filterBox.x0)];
+    // The sample whose stride x stride block (offset stride / 2) holds the pixel.
+    const int offset = filterStride / 2;
+    const int i = std::min(filterColumns - 1, (u - filterBox.x0 + offset) / filterStride);
+    const int j = std::min(filterRows - 1, (v - filterBox.y0 + offset) / filterStride);
+    return filteredDepthM[static_cast<std::size_t>(j) * filterColumns +
+                          static_cast<std::size_t>(i)];
   }
   const float z =
       static_cast<float>(
@@ -414,8 +476,7 @@ bool CloudFrame::isFree(const Vec3& p, float toleranceM) const {
   if (!(p.z() > 0.0f) || rawDepth.empty()) return false;
   const Vec2 pixel = intrinsics.project(p);
   if (!intrinsics.contains(pixel.x(), pixel.y())) return false;
-  const float z =
-      depthAt(static_cast<int>(std::lround(pixel.x())), static_cast<int>(std::lround(pixel.y())));
+  const float z = depthAt(roundToInt(pixel.x()), roundToInt(pixel.y()));
   return z == 0.0f || z > p.z() + toleranceM;
 }
 

@@ -60,23 +60,23 @@ void removeFlyingPixels(const std::vector<float>& in, int w, int h, const DepthS
 
 }  // namespace
 
-void filterBox(const DepthFrame& frame, const PixelBox& box, const DepthFilterConfig& config,
-               const DepthStepRule& stepRule, float fx, float fy, FilterScratch& scratch,
-               std::vector<float>& out) {
+void filterBox(const DepthFrame& frame, const PixelBox& box, int stride,
+               const DepthFilterConfig& config, const DepthStepRule& stepRule, float fx, float fy,
+               FilterScratch& scratch, std::vector<float>& out) {
   assert(!box.empty() && box.x0 >= 0 && box.y0 >= 0 && box.x1 <= frame.width &&
-         box.y1 <= frame.height);
-  const int w = box.width();
-  const int h = box.height();
+         box.y1 <= frame.height && stride >= 1);
+  const int w = samplesAlong(box.width(), stride);
+  const int h = samplesAlong(box.height(), stride);
   const auto n = static_cast<std::size_t>(w) * h;
   const auto [lo, hi] = rawRange(config, frame.depthScale);
 
   scratch.gated.resize(n);
   for (int v = 0; v < h; ++v) {
     const std::uint16_t* src =
-        frame.depth.data() + static_cast<std::size_t>(v + box.y0) * frame.width + box.x0;
+        frame.depth.data() + static_cast<std::size_t>(box.y0 + v * stride) * frame.width + box.x0;
     std::uint16_t* dst = scratch.gated.data() + static_cast<std::size_t>(v) * w;
     for (int u = 0; u < w; ++u) {
-      const std::uint32_t d = src[u];
+      const std::uint32_t d = src[u * stride];
       dst[u] = d >= lo && d <= hi ? static_cast<std::uint16_t>(d) : std::uint16_t{0};
     }
   }
@@ -109,7 +109,9 @@ void filterBox(const DepthFrame& frame, const PixelBox& box, const DepthFilterCo
 
   out.resize(n);
   if (config.removeFlyingPixels) {
-    removeFlyingPixels(scratch.metres, w, h, stepRule, fx, fy, out);
+    // Neighbouring samples are `stride` pixels apart.
+    removeFlyingPixels(scratch.metres, w, h, stepRule, fx / static_cast<float>(stride),
+                       fy / static_cast<float>(stride), out);
   } else {
     std::copy(scratch.metres.begin(), scratch.metres.end(), out.begin());
   }

@@ -22,11 +22,16 @@ struct FilterScratch {
   void reserve(std::size_t pixels);
 };
 
-// Writes the filtered depth (m, 0 = none) of `box` of the raw frame into `out`
-// (box.height() x box.width(), row-major). fx, fy: focal lengths (pixels) for the
-// flying-pixel step rule.
-void filterBox(const DepthFrame& frame, const PixelBox& box, const DepthFilterConfig& config,
-               const DepthStepRule& stepRule, float fx, float fy, FilterScratch& scratch,
-               std::vector<float>& out);
+// Samples along `pixels` taken every `stride` pixels.
+inline int samplesAlong(int pixels, int stride) {
+  return (pixels + stride - 1) / stride;
+}
+
+// Writes the filtered depth (m, 0 = none) of the samples of `box` taken every `stride`
+// pixels into `out`, row-major (samplesAlong(height) x samplesAlong(width)). fx, fy:
+// focal lengths (pixels) for the flying-pixel rule.
+void filterBox(const DepthFrame& frame, const PixelBox& box, int stride,
+               const DepthFilterConfig& config, const DepthStepRule& stepRule, float fx, float fy,
+               FilterScratch& scratch, std::vector<float>& out);
 
 }  // namespace dynahand::cloud

@@ -20,8 +20,9 @@ void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
   k_ = k;
   const auto cells = static_cast<std::size_t>(grid.width) * grid.height;
   labels_.assign(cells, kFree);
-  // Stamps persist across grids (attempt_ only grows), so they need no clearing.
-  if (visited_.size() < cells) visited_.resize(cells, 0u);
+  // One byte per cell (cache-friendly); cleared per grid and when the 255 stamps run out.
+  visited_.assign(cells, 0);
+  attempt_ = 0;
   queue_.resize(cells);
   regionEnd_ = 0;
   cutBegin_ = static_cast<int>(cells);
@@ -47,21 +48,6 @@ int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
   return best;
 }
 
-int RegionGrower::nearestFreeCellIn(const std::vector<std::uint8_t>& allowed,
-                                    std::uint8_t value) const {
-  assert(allowed.size() == labels_.size());
-  int best = -1;
-  float bestDepth = std::numeric_limits<float>::infinity();
-  const std::size_t cells = labels_.size();
-  for (std::size_t c = 0; c < cells; ++c) {
-    const float z = grid_.depth[c];
-    if (z == 0.0f || z >= bestDepth || allowed[c] != value || labels_[c] != kFree) continue;
-    bestDepth = z;
-    best = static_cast<int>(c);
-  }
-  return best;
-}
-
 GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radiusM) {
   assert(seed >= 0 && static_cast<std::size_t>(seed) < labels_.size());
   const int w = grid_.width;
@@ -82,10 +68,10 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
 
   ++attempt_;
   if (attempt_ == 0) {  // stamp wrap-around: wipe once
-    std::fill(visited_.begin(), visited_.end(), 0u);
+    std::fill(visited_.begin(), visited_.end(), std::uint8_t{0});
     attempt_ = 1;
   }
-  const std::uint32_t stamp = attempt_;
+  const std::uint8_t stamp = attempt_;
   GrownRegion r;
   const int seedI = seed % w;
   const int seedJ = seed / w;
@@ -160,6 +146,16 @@ void RegionGrower::accept(CellLabel region) {
 
 void RegionGrower::reject() {
   for (int q = 0; q < regionEnd_; ++q) labels_[static_cast<std::size_t>(queue_[q])] = kTried;
+}
+
+void RegionGrower::retireAccepted() {
+  for (std::uint8_t& label : labels_) {
+    if (label == kRegion1 || label == kRegion2) {
+      label = kTried;
+    } else if (label == kCut1 || label == kCut2) {
+      label = kFree;
+    }
+  }
 }
 
 }  // namespace dynahand::cloud

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "dynahand/cloud.h"
@@ -61,8 +62,25 @@ class RegionGrower {
   // that depth; with avoidCentre set, only cells farther than avoidRadiusM from it.
   int nearestFreeCell(float maxDepthM = 0.0f, const Vec3* avoidCentre = nullptr,
                       float avoidRadiusM = 0.0f) const;
-  // Nearest valid kFree cell whose `allowed` entry is non-zero (same indexing), or -1.
-  int nearestFreeCellIn(const std::vector<std::uint8_t>& allowed, std::uint8_t value) const;
+  // Nearest valid kFree cell (i, j) for which allowed(i, j) is true, or -1. The
+  // predicate is only asked about cells nearer than the best so far (rarely).
+  template <class Allowed>
+  int nearestFreeCellWhere(const Allowed& allowed) const {
+    int best = -1;
+    float bestDepth = std::numeric_limits<float>::infinity();
+    for (int j = 0; j < grid_.height; ++j) {
+      const std::size_t row = static_cast<std::size_t>(j) * grid_.width;
+      const float* depth = grid_.depth + row;
+      for (int i = 0; i < grid_.width; ++i) {
+        const float z = depth[i];
+        // Strict < keeps the first cell in scan order on ties (deterministic).
+        if (z == 0.0f || z >= bestDepth || labels_[row + i] != kFree || !allowed(i, j)) continue;
+        bestDepth = z;
+        best = static_cast<int>(row + static_cast<std::size_t>(i));
+      }
+    }
+    return best;
+  }
 
   // Grows from `seed` across neighbours within the step rule and radiusM of the seed's
   // point. Cells stay unlabelled until accept() or reject().
@@ -71,6 +89,8 @@ class RegionGrower {
   void accept(CellLabel region);
   // Labels the last grown region kTried (its seed is not tried again).
   void reject();
+  // Turns all accepted regions into kTried and frees their cut cells.
+  void retireAccepted();
 
   const std::vector<std::uint8_t>& labels() const { return labels_; }
   const DepthGrid& grid() const { return grid_; }
@@ -78,12 +98,12 @@ class RegionGrower {
  private:
   DepthGrid grid_;
   Intrinsics k_;
-  std::vector<std::uint8_t> labels_;    // (cells) CellLabel
-  std::vector<std::uint32_t> visited_;  // (cells) attempt stamp
-  std::vector<std::int32_t> queue_;     // region cells from the front, cut cells from the back
-  std::uint32_t attempt_ = 0;
-  int regionEnd_ = 0;  // queue_[0, regionEnd_) = region of the last grow
-  int cutBegin_ = 0;   // queue_[cutBegin_, cells) = its cut cells
+  std::vector<std::uint8_t> labels_;   // (cells) CellLabel
+  std::vector<std::uint8_t> visited_;  // (cells) attempt that reached the cell, 0 = none
+  std::vector<std::int32_t> queue_;    // region cells from the front, cut cells from the back
+  std::uint8_t attempt_ = 0;           // grows per grow() call, reset with the grid
+  int regionEnd_ = 0;                  // queue_[0, regionEnd_) = region of the last grow
+  int cutBegin_ = 0;                   // queue_[cutBegin_, cells) = its cut cells
 };
 
 }  // namespace dynahand::cloud

@@ -17,6 +17,12 @@ std::uint64_t mixKey(std::uint64_t x) {
   return x;
 }
 
+// floor() for |x| < 2^21 without a libm call (baseline x86-64 has no roundss).
+std::int32_t floorToInt(float x) {
+  const auto i = static_cast<std::int32_t>(x);  // truncates toward zero
+  return static_cast<float>(i) > x ? i - 1 : i;
+}
+
 std::uint64_t packKey(std::int32_t ix, std::int32_t iy, std::int32_t iz) {
   constexpr std::int32_t kOffset = VoxelGrid::kMaxAbsCoordinate + 1;
   const auto field = [](std::int32_t c) { return static_cast<std::uint64_t>(c + kOffset); };
@@ -32,9 +38,7 @@ VoxelGrid::VoxelGrid(float voxelSizeM, int maxVoxels)
   // Load factor at most 1/2 keeps probe sequences short.
   const std::uint32_t slotCount = std::bit_ceil(static_cast<std::uint32_t>(maxVoxels) * 2u);
   slotMask_ = slotCount - 1u;
-  slotKey_.assign(slotCount, 0);
-  slotStamp_.assign(slotCount, 0);
-  slotVoxel_.assign(slotCount, 0);
+  slots_.assign(slotCount, Slot{});
   const auto n = static_cast<std::size_t>(maxVoxels);
   sum_.assign(n, Vec3::Zero());
   corner_.assign(n, Vec3::Zero());
@@ -45,50 +49,68 @@ VoxelGrid::VoxelGrid(float voxelSizeM, int maxVoxels)
 void VoxelGrid::clear() {
   voxelCount_ = 0;
   droppedPoints_ = 0;
+  lastVoxel_ = -1;
   ++stamp_;
   if (stamp_ == 0) {  // wrapped after 2^32 frames: stale stamps could alias, so wipe once
-    std::fill(slotStamp_.begin(), slotStamp_.end(), 0u);
+    for (Slot& slot : slots_) slot.stamp = 0;
     stamp_ = 1;
   }
 }
 
 bool VoxelGrid::add(const Vec3& point, std::int32_t tag) {
-  const float fx = std::floor(point.x() * inverseVoxelSize_);
-  const float fy = std::floor(point.y() * inverseVoxelSize_);
-  const float fz = std::floor(point.z() * inverseVoxelSize_);
+  const float sx = point.x() * inverseVoxelSize_;
+  const float sy = point.y() * inverseVoxelSize_;
+  const float sz = point.z() * inverseVoxelSize_;
   constexpr auto kLimit = static_cast<float>(kMaxAbsCoordinate);
   // The negated comparison also rejects NaN.
-  if (!(std::fabs(fx) <= kLimit && std::fabs(fy) <= kLimit && std::fabs(fz) <= kLimit)) {
+  if (!(std::fabs(sx) <= kLimit && std::fabs(sy) <= kLimit && std::fabs(sz) <= kLimit)) {
     ++droppedPoints_;
     return false;
   }
-  const auto ix = static_cast<std::int32_t>(fx);
-  const auto iy = static_cast<std::int32_t>(fy);
-  const auto iz = static_cast<std::int32_t>(fz);
+  const std::int32_t ix = floorToInt(sx);
+  const std::int32_t iy = floorToInt(sy);
+  const std::int32_t iz = floorToInt(sz);
   const std::uint64_t key = packKey(ix, iy, iz);
-  std::uint32_t slot = static_cast<std::uint32_t>(mixKey(key)) & slotMask_;
+  if (lastVoxel_ >= 0 && key == lastKey_) {
+    const auto v = static_cast<std::size_t>(lastVoxel_);
+    sum_[v] += point - corner_[v];
+    ++count_[v];
+    return true;
+  }
+  // x-neighbouring voxels get neighbouring slots: a row-major pixel scan then walks the
+  // table along cache lines instead of missing on every new voxel.
+  const std::uint64_t yz = packKey(0, iy, iz);
+  std::uint32_t index =
+      (static_cast<std::uint32_t>(mixKey(yz)) + static_cast<std::uint32_t>(ix)) & slotMask_;
   for (;;) {
-    if (slotStamp_[slot] != stamp_) break;  // empty this frame: a new voxel
-    if (slotKey_[slot] == key) {
-      const auto v = static_cast<std::size_t>(slotVoxel_[slot]);
+    Slot& slot = slots_[index];
+    if (slot.stamp != stamp_) break;  // empty this frame: a new voxel
+    if (slot.key == key) {
+      const auto v = static_cast<std::size_t>(slot.voxel);
       sum_[v] += point - corner_[v];
       ++count_[v];
+      lastKey_ = key;
+      lastVoxel_ = slot.voxel;
       return true;
     }
-    slot = (slot + 1u) & slotMask_;
+    index = (index + 1u) & slotMask_;
   }
   if (voxelCount_ == maxVoxels_) {
     ++droppedPoints_;
     return false;
   }
   const auto v = static_cast<std::size_t>(voxelCount_++);
-  slotStamp_[slot] = stamp_;
-  slotKey_[slot] = key;
-  slotVoxel_[slot] = static_cast<std::int32_t>(v);
-  corner_[v] = Vec3(fx, fy, fz) * voxelSize_;
+  Slot& slot = slots_[index];
+  slot.stamp = stamp_;
+  slot.key = key;
+  slot.voxel = static_cast<std::int32_t>(v);
+  corner_[v] =
+      Vec3(static_cast<float>(ix), static_cast<float>(iy), static_cast<float>(iz)) * voxelSize_;
   sum_[v] = point - corner_[v];
   count_[v] = 1;
   firstTag_[v] = tag;
+  lastKey_ = key;
+  lastVoxel_ = slot.voxel;
   return true;
 }
 

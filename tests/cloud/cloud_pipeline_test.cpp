@@ -57,7 +57,7 @@ TEST(CloudPipeline, PlaneAtHalfMetreDeprojectsToHalfMetreEverywhere) {
   }
   int weights = 0;
   for (int w : out.pointWeights) weights += w;
-  EXPECT_EQ(weights, out.segment.pixelCount);
+  EXPECT_EQ(weights, out.segment.sampleCount);
 }
 
 TEST(CloudPipeline, SegmentationPicksTheNearerOfTwoBlobs) {

@@ -21,8 +21,8 @@ struct ModelPose {
 };
 
 // The root body's world pose and, per joint (indexed like model.joints()), the angles
-// (flexion about x, abduction about y, twist about z of the joint frame), rad. The child's
-// orientation is parent * joint.frame * Rx(flexion) * Ry(abduction) * Rz(twist).
+// (flexion, abduction, twist), rad. The child's orientation is
+// parent * joint.frame * jointRotation(angles); see jointRotation for the convention.
 struct JointAngles {
   Pose root;
   std::vector<Vec3> angles;
@@ -33,14 +33,22 @@ JointAngles zeroAngles(const ArticulatedModel& model);
 // Each angle clamped into its joint's [min, max].
 void clampToLimits(const ArticulatedModel& model, JointAngles& angles);
 // Whether every angle is within its limits (+ tolerance, rad).
-bool withinLimits(const ArticulatedModel& model, const JointAngles& angles, float tolerance = 1e-5f);
+bool withinLimits(const ArticulatedModel& model, const JointAngles& angles,
+                  float tolerance = 1e-5f);
 
-// The rotation Rx(angles.x) * Ry(angles.y) * Rz(angles.z) and its inverse (|y| < pi/2).
+// The joint rotation of (flexion, abduction, twist), rad, and its inverse (|abduction| < pi/2).
+// The physics convention (physics_angles.h) in the model's joint axes (+z along the child
+// bone, +x the flexion axis, +y dorsal): the bone direction is
+//   d = (-sin(abduction), -cos(abduction) sin(flexion), cos(abduction) cos(flexion)),
+// the rotation is the shortest swing z -> d followed by the twist about z. Pure flexion is a
+// rotation about +x (the bone turns toward -y, the palm); pure abduction one about -y (the
+// bone turns toward -x: ulnar for a right hand); pure twist one about +z.
 Quat jointRotation(const Vec3& angles);
 Vec3 jointRotationAngles(const Quat& rotation);
 
 ModelPose forwardKinematics(const ArticulatedModel& model, const JointAngles& angles);
-void forwardKinematicsInto(const ArticulatedModel& model, const JointAngles& angles, ModelPose& out);
+void forwardKinematicsInto(const ArticulatedModel& model, const JointAngles& angles,
+                           ModelPose& out);
 
 // Angles recovered from body orientations (positions are not used; the root pose is the root
 // body's pose).
@@ -50,14 +58,16 @@ void jointAnglesInto(const ArticulatedModel& model, const ModelPose& pose, Joint
 // Linear in the angles, slerp of the root; t in [0, 1]. Joint-consistent at every t.
 JointAngles interpolate(const JointAngles& a, const JointAngles& b, float t);
 // Poses interpolated through their joint angles (so joints stay attached).
-ModelPose interpolate(const ArticulatedModel& model, const ModelPose& a, const ModelPose& b, float t);
+ModelPose interpolate(const ArticulatedModel& model, const ModelPose& a, const ModelPose& b,
+                      float t);
 
 // Angles of the mirror image (see mirrorModel): (f, a, t) -> (f, -a, -t), root mirrored
 // through the x = 0 plane of the world.
 JointAngles mirrorAngles(const JointAngles& angles);
 
 // World position of every keypoint of the model (indexed like model.keypoints()).
-void keypointPositionsInto(const ArticulatedModel& model, const ModelPose& pose, std::vector<Vec3>& out);
+void keypointPositionsInto(const ArticulatedModel& model, const ModelPose& pose,
+                           std::vector<Vec3>& out);
 
 // 21 hand keypoints in MediaPipe order: 0 wrist; 1-4 thumb CMC, MCP, IP, TIP; 5-8 index MCP,
 // PIP, DIP, TIP; 9-12 middle; 13-16 ring; 17-20 pinky. Requires model.hasKeypoints21().

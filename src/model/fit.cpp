@@ -112,16 +112,22 @@ float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> 
   double lambda = 1e-3;
   for (int it = 0; it < options.maxIterations && cost > goal; ++it) {
     ++iterations;
-    // Jacobian at the current state (pose_ and positions_ are current).
+    // Jacobian at the current state (pose_ and positions_ are current). A joint angle turns
+    // the child about a world axis through the joint centre; the angular rate per radian
+    // comes from a central difference of the joint rotation (swing-twist is not a fixed-axis
+    // product), so each column is exact to O(h^2).
+    constexpr float h = 1e-3f;
     for (int k = 0; k < jointParams; ++k) {
       const Param& param = params_[static_cast<size_t>(k)];
       const Joint& joint = model.joints()[static_cast<size_t>(param.joint)];
-      const Vec3& a = angles.angles[static_cast<size_t>(param.joint)];
-      const Quat base = pose_.bodies[static_cast<size_t>(joint.parent)].q * joint.frame;
-      const Quat flexed = base * Quat(Eigen::AngleAxisf(a.x(), Vec3::UnitX()));
-      axes[static_cast<size_t>(k)] = param.axis == 0   ? base * Vec3::UnitX()
-                                     : param.axis == 1 ? flexed * Vec3::UnitY()
-                                                       : pose_.bodies[static_cast<size_t>(joint.child)].q * Vec3::UnitZ();
+      Vec3 plus = angles.angles[static_cast<size_t>(param.joint)];
+      Vec3 minus = plus;
+      plus[param.axis] += h;
+      minus[param.axis] -= h;
+      Quat delta = jointRotation(plus) * jointRotation(minus).conjugate();
+      if (delta.w() < 0.0f) delta.coeffs() = -delta.coeffs();
+      const Vec3 rateLocal = delta.vec() / h;  // rotation vector 2 * vec over the step 2h
+      axes[static_cast<size_t>(k)] = pose_.bodies[static_cast<size_t>(joint.parent)].q * (joint.frame * rateLocal);
       const Vec3 centre = pose_.bodies[static_cast<size_t>(joint.child)].transform(joint.anchorChild);
       centres[static_cast<size_t>(k)] = angles.root.p + scale * (centre - angles.root.p);
     }

@@ -1,9 +1,12 @@
 // Forward kinematics and its inverse (angles from orientations), limits, interpolation.
-// The joint rotation is intrinsic x-y-z: R = Rx(flexion) * Ry(abduction) * Rz(twist) in the
-// joint frame; singular only at |abduction| = 90 degrees, which the limits exclude.
+// Joint angles follow the physics convention (physics_angles.h: swing-twist, flexion =
+// atan2 of the bone direction, abduction = its elevation, twist about the bone), expressed in
+// the model's joint axes (bone +z, flexion about +x); singular only at |abduction| = 90
+// degrees, which the limits exclude.
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <numbers>
 
 #include "dynahand/model_pose.h"
 
@@ -36,21 +39,27 @@ bool withinLimits(const ArticulatedModel& model, const JointAngles& angles, floa
 }
 
 Quat jointRotation(const Vec3& angles) {
-  const Vec3 h = angles * 0.5f;
-  const Quat qx(std::cos(h.x()), std::sin(h.x()), 0.0f, 0.0f);
-  const Quat qy(std::cos(h.y()), 0.0f, std::sin(h.y()), 0.0f);
-  const Quat qz(std::cos(h.z()), 0.0f, 0.0f, std::sin(h.z()));
-  return qx * qy * qz;
+  // physics::composeJointRotation in the model's axes (physics X, Y, Z = model z, -y, x):
+  // the bone direction d from flexion and abduction, the shortest swing z -> d, then the twist.
+  const float f = angles.x();
+  const float a = angles.y();
+  const Vec3 d(-std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
+  const Quat swing = Quat::FromTwoVectors(Vec3::UnitZ(), d);
+  const Quat twist(std::cos(0.5f * angles.z()), 0.0f, 0.0f, std::sin(0.5f * angles.z()));
+  return (swing * twist).normalized();
 }
 
 Vec3 jointRotationAngles(const Quat& rotation) {
-  // R = Rx(f) Ry(a) Rz(t) has R02 = sin a, (R12, R22) = cos a (-sin f, cos f),
-  // (R01, R00) = cos a (-sin t, cos t).
-  const Mat3 r = rotation.normalized().toRotationMatrix();
-  const float abduction = std::atan2(r(0, 2), std::sqrt(r(1, 2) * r(1, 2) + r(2, 2) * r(2, 2)));
-  const float flexion = std::atan2(-r(1, 2), r(2, 2));
-  const float twist = std::atan2(-r(0, 1), r(0, 0));
-  return {flexion, abduction, twist};
+  const Quat q = rotation.normalized();
+  const Vec3 d = q * Vec3::UnitZ();
+  const float flexion = std::atan2(-d.y(), d.z());
+  const float abduction = std::asin(std::clamp(-d.x(), -1.0f, 1.0f));
+  const Quat twist = Quat::FromTwoVectors(Vec3::UnitZ(), d).conjugate() * q;
+  float angle = 2.0f * std::atan2(twist.z(), twist.w());
+  constexpr float kPi = std::numbers::pi_v<float>;
+  if (angle > kPi) angle -= 2.0f * kPi;
+  if (angle <= -kPi) angle += 2.0f * kPi;
+  return {flexion, abduction, angle};
 }
 
 void forwardKinematicsInto(const ArticulatedModel& model, const JointAngles& angles, ModelPose& out) {

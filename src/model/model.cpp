@@ -30,12 +30,13 @@ std::optional<Error> checkLimits(const JointSpec& joint, const std::string& path
     if (!std::isfinite(lo)) return pathError(vecPath(path + ".minDeg", axis), "not a finite number");
     if (!std::isfinite(hi)) return pathError(vecPath(path + ".maxDeg", axis), "not a finite number");
     if (lo > hi) return pathError(vecPath(path + ".minDeg", axis), "greater than maxDeg");
-    // Rx * Ry * Rz is singular at |abduction| = 90 degrees.
-    const float bound = axis == 1 ? kHalfPi - 1e-3f : kPi;
+    // The swing is singular at |abduction| = 90 and at flexion = 180 degrees.
+    const float bound = axis == 0 ? kPi * (179.0f / 180.0f) : axis == 1 ? kHalfPi - 1e-3f : kPi;
     if (lo < -bound || hi > bound) {
-      return pathError(vecPath(path + (lo < -bound ? ".minDeg" : ".maxDeg"), axis),
-                       axis == 1 ? "abduction limits must lie inside (-90, 90) degrees"
-                                 : "limits must lie within [-180, 180] degrees");
+      const char* problem = axis == 0   ? "flexion limits must lie within [-179, 179] degrees"
+                            : axis == 1 ? "abduction limits must lie inside (-90, 90) degrees"
+                                        : "twist limits must lie within [-180, 180] degrees";
+      return pathError(vecPath(path + (lo < -bound ? ".minDeg" : ".maxDeg"), axis), problem);
     }
   }
   return std::nullopt;

@@ -21,18 +21,24 @@ const ArticulatedModel& hand() {
 
 float angleBetween(const Quat& a, const Quat& b) { return a.angularDistance(b); }
 
-TEST(Kinematics, JointRotationIsIntrinsicXyz) {
-  const float f = 0.3f, a = -0.4f, t = 0.7f;
-  const Quat expected = Quat(Eigen::AngleAxisf(f, Vec3::UnitX())) * Quat(Eigen::AngleAxisf(a, Vec3::UnitY())) *
-                        Quat(Eigen::AngleAxisf(t, Vec3::UnitZ()));
-  EXPECT_LT(angleBetween(jointRotation(Vec3(f, a, t)), expected), 1e-6f);
-  // Positive flexion turns the bone's +z toward -y (the palm side).
-  const Vec3 z = jointRotation(Vec3(std::numbers::pi_v<float> / 2, 0, 0)) * Vec3::UnitZ();
-  EXPECT_LT((z - Vec3(0, -1, 0)).norm(), 1e-6f);
-  // Positive abduction turns +z toward +x.
-  const Vec3 z2 = jointRotation(Vec3(0, 0.5f, 0)) * Vec3::UnitZ();
-  EXPECT_GT(z2.x(), 0.4f);
-  EXPECT_LT((jointRotationAngles(jointRotation(Vec3(f, a, t))) - Vec3(f, a, t)).norm(), 1e-6f);
+TEST(Kinematics, JointRotationIsSwingTwistInModelAxes) {
+  constexpr float kHalfPi = std::numbers::pi_v<float> / 2;
+  // Pure flexion: about +x; the bone (+z) turns toward -y (the palm side).
+  EXPECT_LT(angleBetween(jointRotation(Vec3(0.7f, 0, 0)), Quat(Eigen::AngleAxisf(0.7f, Vec3::UnitX()))), 1e-6f);
+  EXPECT_LT((jointRotation(Vec3(kHalfPi, 0, 0)) * Vec3::UnitZ() - Vec3(0, -1, 0)).norm(), 1e-6f);
+  // Pure abduction: about -y; the bone turns toward -x.
+  EXPECT_LT(angleBetween(jointRotation(Vec3(0, 0.4f, 0)), Quat(Eigen::AngleAxisf(0.4f, -Vec3::UnitY()))), 1e-6f);
+  // Pure twist: about +z.
+  EXPECT_LT(angleBetween(jointRotation(Vec3(0, 0, 0.9f)), Quat(Eigen::AngleAxisf(0.9f, Vec3::UnitZ()))), 1e-6f);
+  // Combined: the bone direction is (-sin a, -cos a sin f, cos a cos f) whatever the twist,
+  // and the twist is a rotation about the bone after the shortest swing.
+  const float f = 1.2f, a = -0.35f, t = 0.5f;
+  const Quat r = jointRotation(Vec3(f, a, t));
+  const Vec3 d(-std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
+  EXPECT_LT((r * Vec3::UnitZ() - d).norm(), 1e-6f);
+  const Quat swing = Quat::FromTwoVectors(Vec3::UnitZ(), d);
+  EXPECT_LT(angleBetween(r, swing * Quat(Eigen::AngleAxisf(t, Vec3::UnitZ()))), 1e-6f);
+  EXPECT_LT((jointRotationAngles(r) - Vec3(f, a, t)).norm(), 1e-5f);
 }
 
 TEST(Kinematics, AnglesPoseAnglesRoundTripWithin1e5) {

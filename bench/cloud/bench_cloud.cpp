@@ -151,8 +151,8 @@ void BM_VoxelGrid_Sr305Hand(benchmark::State& state) {
   for (int v = 0; v < clip.k.height; ++v) {
     for (int u = 0; u < clip.k.width; ++u) {
       if (out.mask[static_cast<std::size_t>(v) * clip.k.width + u]) {
-        pixels.push_back(clip.k.deproject(static_cast<float>(u), static_cast<float>(v),
-                                          out.depthAt(u, v)));
+        pixels.push_back(
+            clip.k.deproject(static_cast<float>(u), static_cast<float>(v), out.depthAt(u, v)));
       }
     }
   }

@@ -31,17 +31,20 @@ void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
 int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
                                   float avoidRadiusM) const {
   int best = -1;
-  float bestDepth = std::numeric_limits<float>::infinity();
-  const float depthLimit = maxDepthM > 0.0f ? maxDepthM : bestDepth;
+  // See nearestFreeCellWhere: bit patterns minus one put "no data" last.
+  const float limit =
+      maxDepthM > 0.0f ? std::nextafter(maxDepthM, 1e9f) : std::numeric_limits<float>::infinity();
+  std::uint32_t bestKey = std::bit_cast<std::uint32_t>(limit) - 1u;
   const float avoid2 = avoidRadiusM * avoidRadiusM;
   for (int j = 0; j < grid_.height; ++j) {
     const std::size_t row = static_cast<std::size_t>(j) * grid_.width;
+    const float* depth = grid_.depth + row;
     for (int i = 0; i < grid_.width; ++i) {
-      const float z = grid_.depth[row + i];
+      const std::uint32_t key = std::bit_cast<std::uint32_t>(depth[i]) - 1u;
       // Strict < keeps the first cell in scan order on ties (deterministic).
-      if (z == 0.0f || z >= bestDepth || z > depthLimit || labels_[row + i] != kFree) continue;
+      if (key >= bestKey || labels_[row + i] != kFree) continue;
       if (avoidCentre && (grid_.point(k_, i, j) - *avoidCentre).squaredNorm() <= avoid2) continue;
-      bestDepth = z;
+      bestKey = key;
       best = static_cast<int>(row + static_cast<std::size_t>(i));
     }
   }

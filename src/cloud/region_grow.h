@@ -2,6 +2,7 @@
 // sufficiently large volume". Shared by the coarse search and the full-resolution pass.
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -67,15 +68,17 @@ class RegionGrower {
   template <class Allowed>
   int nearestFreeCellWhere(const Allowed& allowed) const {
     int best = -1;
-    float bestDepth = std::numeric_limits<float>::infinity();
+    // Positive floats order like their bit patterns; "bits - 1" wraps 0 (no data) to the
+    // largest value, so one well-predicted comparison skips both empty and farther cells.
+    std::uint32_t bestKey = std::bit_cast<std::uint32_t>(std::numeric_limits<float>::infinity());
     for (int j = 0; j < grid_.height; ++j) {
       const std::size_t row = static_cast<std::size_t>(j) * grid_.width;
       const float* depth = grid_.depth + row;
       for (int i = 0; i < grid_.width; ++i) {
-        const float z = depth[i];
+        const std::uint32_t key = std::bit_cast<std::uint32_t>(depth[i]) - 1u;
         // Strict < keeps the first cell in scan order on ties (deterministic).
-        if (z == 0.0f || z >= bestDepth || labels_[row + i] != kFree || !allowed(i, j)) continue;
-        bestDepth = z;
+        if (key >= bestKey || labels_[row + i] != kFree || !allowed(i, j)) continue;
+        bestKey = key;
         best = static_cast<int>(row + static_cast<std::size_t>(i));
       }
     }

@@ -138,16 +138,9 @@ TEST(CloudPipeline, ForearmIsCutAtTheHandRadiusAndItsSideHasNoPlane) {
   }
 }
 
-TEST(CloudPipeline, BoundaryPlanesContainEverySegmentedPixelAndPoint) {
-  const Intrinsics k = cloud::scenes::camera(320, 240);
-  const DepthFrame frame =
-      cloud::scenes::render(k, cloud::scenes::handWithForearm(Vec3(0.04f, 0.0f, 0.45f)), 0.9f);
-  CloudConfig config;
-  config.planes.omitHalfAngle = 0.0f;  // all sides
-  CloudPipeline pipeline(k, config);
-  CloudFrame out;
-  ASSERT_TRUE(pipeline.process(frame, out).ok());
-  ASSERT_TRUE(out.segment.found);
+// Every voxel point and every masked pixel (deprojected at its depth) lies inside all planes.
+void checkPlanesContainSegment(const Intrinsics& k, const CloudConfig& config,
+                               const CloudFrame& out) {
   ASSERT_EQ(out.planes.size(), static_cast<std::size_t>(config.planes.planeCount));
   for (const BoundaryPlane& plane : out.planes) {
     for (const Vec3& p : out.points) EXPECT_LE(plane.signedDistance(p), 1e-6f);
@@ -158,6 +151,51 @@ TEST(CloudPipeline, BoundaryPlanesContainEverySegmentedPixelAndPoint) {
         ASSERT_LE(plane.signedDistance(p), 1e-6f) << "pixel " << u << "," << v;
       }
     }
+  }
+}
+
+TEST(CloudPipeline, BoundaryPlanesContainEverySegmentedPixelAndPoint) {
+  // Stride 1 at 320x240, and strides 2 and 3 at 640x480 (mask blocks around samples).
+  for (const int stride : {1, 2, 3}) {
+    SCOPED_TRACE(stride);
+    const Intrinsics k = cloud::scenes::camera(stride == 1 ? 320 : 640, stride == 1 ? 240 : 480);
+    const DepthFrame frame =
+        cloud::scenes::render(k, cloud::scenes::handWithForearm(Vec3(0.04f, 0.0f, 0.45f)), 0.9f);
+    CloudConfig config;
+    config.planes.omitHalfAngle = 0.0f;  // all sides
+    config.sampleStride = stride;
+    CloudPipeline pipeline(k, config);
+    CloudFrame out;
+    ASSERT_TRUE(pipeline.process(frame, out).ok());
+    ASSERT_TRUE(out.segment.found);
+    EXPECT_EQ(out.filterStride, stride);
+    checkPlanesContainSegment(k, config, out);
+  }
+}
+
+TEST(CloudPipeline, AutomaticStrideKeepsHalfAVoxelBetweenSamples) {
+  // Hand at 0.45 m; 60-degree camera. 320 px: 1.6 mm between pixels -> stride 1;
+  // 640 px: 0.8 mm -> stride 3 (2.4 mm <= 2.5 mm).
+  for (const int width : {320, 640}) {
+    const Intrinsics k = cloud::scenes::camera(width, width * 3 / 4);
+    const DepthFrame frame =
+        cloud::scenes::render(k, cloud::scenes::handWithForearm(Vec3(0.0f, 0.0f, 0.45f)), 0.9f);
+    CloudPipeline pipeline(k);
+    CloudFrame out;
+    ASSERT_TRUE(pipeline.process(frame, out).ok());
+    ASSERT_TRUE(out.segment.found);
+    const float spacing =
+        out.segment.nearestPoint.z() * static_cast<float>(out.filterStride) / k.fx;
+    // The stride is chosen at the coarse nearest depth, within a few mm of the final one.
+    const float halfVoxel = 0.5f * pipeline.config().voxelSizeM;
+    EXPECT_LE(spacing, 1.02f * halfVoxel);
+    EXPECT_GT(
+        spacing / static_cast<float>(out.filterStride) * static_cast<float>(out.filterStride + 1),
+        0.98f * halfVoxel);  // the largest such stride
+    EXPECT_EQ(out.filterStride, width == 320 ? 1 : 3);
+    int weights = 0;
+    for (int w : out.pointWeights) weights += w;
+    EXPECT_EQ(weights, out.segment.sampleCount);
   }
 }
 

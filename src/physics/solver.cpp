@@ -1,0 +1,455 @@
+// World::step: the projected Gauss-Seidel pipeline (stage order as Box2D v3's solver.c:
+// integrate velocities -> warm start -> solve with bias -> integrate positions -> relax).
+//
+// Every constraint is a scalar row  Jv = axis·(vB - vA) + angA·wA + angB·wB  with
+//   impulse increment  d = -effMass (Jv + bias),  accumulated impulse clamped to [lower, upper],
+//   effMass = 1 / ((invMassA + invMassB)|axis|^2 + angA·IA^-1 angA + angB·IB^-1 angB).
+// Position error C enters as bias = erp C / dt (rows that must reach C = 0) or, for one-sided
+// rows (C >= 0) that are not yet violated, as the speculative bias C / dt (the row only acts
+// if the velocity would cross the boundary within this step). The relax sweeps drop the erp
+// part so the correction velocity does not survive as momentum.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+#include "physics/rows.h"
+
+namespace dynahand::physics {
+namespace {
+
+
+constexpr float kMaxRotationPerStep = 0.25f * 3.14159265f;  // rad
+constexpr float kMaxJointCorrection = 0.005f;  // m per projection pass
+
+Mat3 skew(const Vec3& v) {
+  Mat3 m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+void setInvInertia(SolverBody& b, const Mat3& inv) {
+  b.ixx = inv(0, 0);
+  b.iyy = inv(1, 1);
+  b.izz = inv(2, 2);
+  b.ixy = 0.5f * (inv(0, 1) + inv(1, 0));
+  b.ixz = 0.5f * (inv(0, 2) + inv(2, 0));
+  b.iyz = 0.5f * (inv(1, 2) + inv(2, 1));
+}
+
+// Implicit gyroscopic step in body axes (one Newton iteration, as in Catto, GDC 2015):
+// stable, and it does not add kinetic energy to a spinning asymmetric body.
+Vec3 gyroscopicStep(const Vec3& wWorld, const Quat& q, const Mat3& inertiaLocal, float h) {
+  const Vec3 wb = q.conjugate() * wWorld;
+  const Vec3 iw = inertiaLocal * wb;
+  const Vec3 f = h * wb.cross(iw);
+  const Mat3 jac = inertiaLocal + h * (skew(wb) * inertiaLocal - skew(iw));
+  Vec3 next = wb - jac.inverse() * f;
+  // Gyroscopic torque does no work: restore the kinetic energy the implicit step bled.
+  const float before = wb.dot(iw), after = next.dot(inertiaLocal * next);
+  if (after > 0.0f) next *= std::sqrt(before / after);
+  return q * next;
+}
+
+inline void applyRowImpulse(std::vector<SolverBody>& sb, const Row& r, float d) {
+  SolverBody& a = sb[static_cast<std::size_t>(r.slotA)];
+  SolverBody& b = sb[static_cast<std::size_t>(r.slotB)];
+  a.v -= (r.invMassA * d) * r.axis;
+  a.w += d * r.invIAngA;
+  b.v += (r.invMassB * d) * r.axis;
+  b.w += d * r.invIAngB;
+}
+
+inline void solveRow(std::vector<SolverBody>& sb, std::vector<Row>& rows, Row& r, bool useBias) {
+  const SolverBody& a = sb[static_cast<std::size_t>(r.slotA)];
+  const SolverBody& b = sb[static_cast<std::size_t>(r.slotB)];
+  const float jv = r.axis.dot(b.v - a.v) + r.angA.dot(a.w) + r.angB.dot(b.w);
+  float lower = r.lower, upper = r.upper;
+  if (r.frictionOf >= 0) {
+    upper = r.friction * rows[static_cast<std::size_t>(r.frictionOf)].impulse;
+    lower = -upper;
+  }
+  const float target = useBias ? r.impulse - r.effMass * r.massScale * (jv + r.bias) -
+                                     r.impulseScale * r.impulse
+                               : r.impulse - r.effMass * (jv + r.relaxBias);
+  const float clamped = std::clamp(target, lower, upper);
+  const float d = clamped - r.impulse;
+  r.impulse = clamped;
+  applyRowImpulse(sb, r, d);
+}
+
+// One sweep over the rows in build order; later rows get the last word (joints and limits
+// after drives, so a drive can never push through a limit). A block (one contact manifold)
+// is iterated blockPasses times in place.
+void solveRows(std::vector<SolverBody>& sb, std::vector<Row>& rows, bool useBias) {
+  const std::size_t count = rows.size();
+  for (std::size_t i = 0; i < count;) {
+    const auto size = static_cast<std::size_t>(rows[i].blockSize);
+    const int passes = rows[i].blockPasses;
+    for (int pass = 0; pass < passes; ++pass) {
+      for (std::size_t k = i; k < i + size; ++k) {
+        Row& r = rows[k];
+        if (useBias || r.relax) solveRow(sb, rows, r, useBias);
+      }
+    }
+    i += size;
+  }
+}
+
+void solveSurfaceRows(std::vector<SolverBody>& sb, World::Impl& m, SurfaceRows& rows, bool useBias) {
+  const std::size_t n = rows.body.size();
+  const float* bias = useBias ? m.surfBias.data() : m.surfRelaxBias.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    SolverBody& b = sb[static_cast<std::size_t>(m.surfSlot[i])];
+    const Vec3& nrm = rows.normal[i];
+    const float jv = nrm.dot(b.v) + m.surfAng[i].dot(b.w);
+    const float old = rows.impulse[i];
+    const float clamped = std::clamp(old - m.surfEffMass[i] * (jv + bias[i]), rows.lower[i], rows.upper[i]);
+    const float d = clamped - old;
+    rows.impulse[i] = clamped;
+    b.v += (m.surfInvMass[i] * d) * nrm;
+    b.w += d * m.surfInvIAng[i];
+  }
+}
+
+// Nonlinear Gauss-Seidel on the joint anchors (Box2D v2's position solver, block 3x3):
+// K = (mA^-1 + mB^-1) 1 - [rA] IA^-1 [rA] - [rB] IB^-1 [rB],  P = -K^-1 C, applied to positions
+// and orientations only, with the arms re-evaluated at the current orientations.
+void projectJointPositions(World::Impl& m, int iterations) {
+  auto rotate = [](Quat& q, const Vec3& angle) {
+    const Quat dq(0.0f, 0.5f * angle.x(), 0.5f * angle.y(), 0.5f * angle.z());
+    q.coeffs() += (dq * q).coeffs();
+    q.normalize();
+  };
+  const std::size_t count = m.jointPositions.size();
+  for (int it = 0; it < iterations; ++it) {
+    for (std::size_t idx = 0; idx < count; ++idx) {
+      const World::Impl::JointPosition& jp = m.jointPositions[idx];
+      const auto ia = static_cast<std::size_t>(jp.slotA), ib = static_cast<std::size_t>(jp.slotB);
+      const SolverBody& a = m.solverBodies[ia];
+      const SolverBody& b = m.solverBodies[ib];
+      const Vec3 rA = m.slotOrientation[ia] * jp.armA;
+      const Vec3 rB = m.slotOrientation[ib] * jp.armB;
+      const Vec3 c = (m.slotPosition[ib] + rB) - (m.slotPosition[ia] + rA);
+      Mat3 invIA, invIB;
+      invIA << a.ixx, a.ixy, a.ixz, a.ixy, a.iyy, a.iyz, a.ixz, a.iyz, a.izz;
+      invIB << b.ixx, b.ixy, b.ixz, b.ixy, b.iyy, b.iyz, b.ixz, b.iyz, b.izz;
+      const Mat3 sA = skew(rA), sB = skew(rB);
+      const Mat3 k = (a.invMass + b.invMass) * Mat3::Identity() - sA * invIA * sA - sB * invIB * sB;
+      if (!(std::abs(k.determinant()) > 1e-20f)) continue;
+      // Large errors are closed over several steps (a projection is only good for small ones).
+      const float len = c.norm();
+      const Vec3 clampedError = len > kMaxJointCorrection ? Vec3(c * (kMaxJointCorrection / len)) : c;
+      const Vec3 p = -(k.inverse() * clampedError);
+      m.slotPosition[ia] -= a.invMass * p;
+      rotate(m.slotOrientation[ia], -(invIA * rA.cross(p)));
+      m.slotPosition[ib] += b.invMass * p;
+      rotate(m.slotOrientation[ib], invIB * rB.cross(p));
+    }
+  }
+}
+
+}  // namespace
+
+void World::step(float h) {
+  assert(h > 0.0f && std::isfinite(h) && "step: dt must be positive");
+  Impl& m = *impl_;
+  WorldState& s = state_;
+  const float invH = 1.0f / h;
+  const std::size_t n = m.bodies.size();
+  const std::size_t groupCount = s.groups.size();
+  const std::size_t slotCount = n + groupCount + 1;
+
+  // --- Solver slots: free bodies, weld groups, static dummy. ---
+  m.solverBodies.resize(slotCount);
+  m.slotPosition.resize(slotCount);
+  m.slotOrientation.resize(slotCount);
+  const SolverBody zero{Vec3::Zero(), 0.0f, Vec3::Zero(), 0.0f, 0, 0, 0, 0, 0, 0, 0.0f, 0.0f};
+  std::fill(m.solverBodies.begin(), m.solverBodies.end(), zero);
+  std::fill(m.slotPosition.begin(), m.slotPosition.end(), Vec3::Zero());
+  std::fill(m.slotOrientation.begin(), m.slotOrientation.end(), Quat::Identity());
+  for (std::size_t i = 0; i < n; ++i) {
+    const BodyConfig& c = m.bodies[i];
+    m.slotPosition[i] = s.position[i];
+    m.slotOrientation[i] = s.orientation[i];
+    if (s.group[i] >= 0 || c.type == BodyType::Static) continue;
+    SolverBody& b = m.solverBodies[i];
+    b.v = s.linearVelocity[i];
+    b.w = s.angularVelocity[i];
+    if (c.type != BodyType::Dynamic) continue;
+    // Integrate velocities: gravity, gyroscopic term, damping.
+    b.invMass = 1.0f / c.mass;
+    const Mat3 r = s.orientation[i].toRotationMatrix();
+    setInvInertia(b, r * c.inertiaLocal.inverse() * r.transpose());
+    b.v += h * settings_.gravity;
+    if (settings_.gyroscopic) b.w = gyroscopicStep(b.w, s.orientation[i], c.inertiaLocal, h);
+    b.v *= 1.0f / (1.0f + h * c.linearDamping);
+    b.w *= 1.0f / (1.0f + h * c.angularDamping);
+  }
+  for (std::size_t g = 0; g < groupCount; ++g) {
+    const WorldState::Group& grp = s.groups[g];
+    if (!grp.alive) continue;
+    float linDamp = 0.0f, angDamp = 0.0f;  // mass-weighted over the members
+    for (std::size_t i = 0; i < n; ++i) {
+      if (s.group[i] != static_cast<int>(g)) continue;
+      linDamp += m.bodies[i].mass * m.bodies[i].linearDamping;
+      angDamp += m.bodies[i].mass * m.bodies[i].angularDamping;
+    }
+    SolverBody& b = m.solverBodies[n + g];
+    m.slotPosition[n + g] = grp.position;
+    m.slotOrientation[n + g] = grp.orientation;
+    b.invMass = 1.0f / grp.mass;
+    const Mat3 r = grp.orientation.toRotationMatrix();
+    setInvInertia(b, r * grp.inertiaLocal.inverse() * r.transpose());
+    b.v = grp.linearVelocity + h * settings_.gravity;
+    b.w = settings_.gyroscopic ? gyroscopicStep(grp.angularVelocity, grp.orientation, grp.inertiaLocal, h)
+                               : grp.angularVelocity;
+    b.v *= 1.0f / (1.0f + h * linDamp / grp.mass);
+    b.w *= 1.0f / (1.0f + h * angDamp / grp.mass);
+  }
+  const int dummy = static_cast<int>(slotCount - 1);
+
+  // --- Rows. Order of the sweeps: drives, cones, contacts, limits, joint points last so the
+  // skeleton is the best-satisfied constraint at the end of every sweep. ---
+  m.rows.clear();
+  RowBuilder rb{m};
+  auto slotOf = [&](std::size_t body) { return m.slotOf(s, static_cast<BodyId>(body)); };
+  auto armOf = [&](std::size_t body, const Vec3& comLocal, Vec3* world) {
+    *world = s.position[body] + s.orientation[body] * comLocal;
+    return Vec3(*world - m.slotPosition[static_cast<std::size_t>(slotOf(body))]);
+  };
+
+  // Body drives: 3 linear + 3 angular motor rows against the static dummy.
+  for (std::size_t i = 0; i < n; ++i) {
+    const BodyConfig& c = m.bodies[i];
+    if (!c.driveEnabled || c.type != BodyType::Dynamic) continue;
+    const int slot = slotOf(i);
+    const float rate = 1.0f / std::max(c.driveTimeConstant, h);
+    const Vec3 targetCom = c.driveTarget.p + c.driveTarget.q * c.centroid;
+    const Vec3 linVel = (targetCom - s.position[i]) * rate;
+    Quat err = c.driveTarget.q * s.orientation[i].conjugate();
+    if (err.w() < 0.0f) err.coeffs() *= -1.0f;
+    const Eigen::AngleAxisf aa(err);
+    const Vec3 angVel = aa.axis() * (aa.angle() * rate);
+    const Vec3 r = s.position[i] - m.slotPosition[static_cast<std::size_t>(slot)];
+    const float fMax = c.driveMaxForce * h, tMax = c.driveMaxTorque * h;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = Vec3::Unit(k);
+      rb.add(dummy, slot, e, Vec3::Zero(), r.cross(e), {-linVel[k], 0.0f}, -fMax, fMax, 0.0f, false);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = Vec3::Unit(k);
+      rb.add(dummy, slot, Vec3::Zero(), Vec3::Zero(), e, {-angVel[k], 0.0f}, -tMax, tMax, 0.0f, false);
+    }
+  }
+  // Joint drives: 3 angular motor rows towards the target relative rotation.
+  for (const JointConfig& j : m.joints) {
+    if (!j.driveEnabled) continue;
+    const auto pa = static_cast<std::size_t>(j.def.parent), pb = static_cast<std::size_t>(j.def.child);
+    const int sa = slotOf(pa), sb = slotOf(pb);
+    if (sa == sb) continue;
+    const Quat desired = s.orientation[pa] * j.def.frameParent * j.driveTarget;
+    const Quat actual = s.orientation[pb] * j.def.frameChild;
+    Quat err = desired * actual.conjugate();
+    if (err.w() < 0.0f) err.coeffs() *= -1.0f;
+    const Eigen::AngleAxisf aa(err);
+    const Vec3 relVel = aa.axis() * (aa.angle() / std::max(j.driveTimeConstant, h));
+    const float tMax = j.driveMaxTorque * h;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = Vec3::Unit(k);
+      rb.add(sa, sb, Vec3::Zero(), -e, e, {-relVel[k], 0.0f}, -tMax, tMax, 0.0f, false);
+    }
+  }
+  // Angular cones: angle(uA, uB) <= maxAngle, one-sided.
+  for (const ConeConfig& c : m.cones) {
+    if (!c.enabled) continue;
+    const auto ia = static_cast<std::size_t>(c.a), ib = static_cast<std::size_t>(c.b);
+    const int sa = slotOf(ia), sb = slotOf(ib);
+    if (sa == sb) continue;
+    const Vec3 u = s.orientation[ia] * c.axisA, v = s.orientation[ib] * c.axisB;
+    const float angle = std::acos(std::clamp(u.dot(v), -1.0f, 1.0f));
+    const float err = c.maxAngle - angle;  // >= 0 allowed; speculative while inside
+    Vec3 axis = u.cross(v);
+    const float len = axis.norm();
+    if (len > 1e-4f) {
+      axis /= len;
+      rb.add(sa, sb, Vec3::Zero(), axis, -axis, oneSidedBias(err, settings_.limitErp, invH), 0.0f,
+             kInf, 0.0f, true);
+    } else {
+      // (Anti)parallel: the opening direction is undefined, so bound the rotation rate about
+      // both axes perpendicular to u (speculative; keeps the angle <= ~sqrt(2) maxAngle).
+      const Vec3 p1 = u.unitOrthogonal(), p2 = u.cross(p1);
+      for (const Vec3& p : {p1, p2}) {
+        rb.add(sa, sb, Vec3::Zero(), p, -p, oneSidedBias(err, settings_.limitErp, invH), 0.0f, kInf,
+               0.0f, true);
+        rb.add(sa, sb, Vec3::Zero(), -p, p, oneSidedBias(err, settings_.limitErp, invH), 0.0f, kInf,
+               0.0f, true);
+      }
+    }
+  }
+  buildContacts(h);  // contacts.cpp-free part: narrow phase + rows (below)
+  // Joints: limits then points.
+  for (std::size_t ji = 0; ji < m.joints.size(); ++ji) {
+    const JointConfig& j = m.joints[ji];
+    float* store = &s.jointImpulse[ji * kJointImpulses];
+    const auto pa = static_cast<std::size_t>(j.def.parent), pb = static_cast<std::size_t>(j.def.child);
+    const int sa = slotOf(pa), sb = slotOf(pb);
+    if (sa == sb) {  // welded together: the joint is internal to the group
+      std::fill(store, store + kJointImpulses, 0.0f);
+      continue;
+    }
+    if (j.def.limitsEnabled) {
+      const Quat frameA = s.orientation[pa] * j.def.frameParent;
+      const Quat rel = frameA.conjugate() * (s.orientation[pb] * j.def.frameChild);
+      const Vec3 angles = decomposeJointRotation(rel);
+      const Vec3 d = rel * Vec3::UnitX();
+      const float dxy2 = std::max(d.x() * d.x() + d.y() * d.y(), 1e-12f);
+      // Rate axes (joint frame): d(angle)/dt = axis · (wB - wA) expressed in frame A.
+      Vec3 axes[3];
+      axes[0] = Vec3(-d.z() * d.x(), -d.z() * d.y(), dxy2) / dxy2;
+      axes[1] = Vec3(-d.y(), d.x(), 0.0f) / std::sqrt(dxy2);
+      // Twist has no simple closed-form rate under large swing: differentiate numerically
+      // (left-perturbation of the relative rotation by a small rotation about each axis).
+      constexpr float kEps = 1e-3f;
+      for (int k = 0; k < 3; ++k) {
+        const Quat nudge(Eigen::AngleAxisf(kEps, Vec3::Unit(k)));
+        float dt = decomposeJointRotation(nudge * rel).z() - angles.z();
+        if (dt > 3.14159265f) dt -= 6.2831853f;
+        if (dt < -3.14159265f) dt += 6.2831853f;
+        axes[2][k] = dt / kEps;
+      }
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 axisWorld = frameA * axes[k];
+        const float toLower = angles[k] - j.def.lower[k];
+        const float toUpper = j.def.upper[k] - angles[k];
+        float* lowStore = store + 3 + 2 * k;
+        float* upStore = lowStore + 1;
+        // Both sides always have a row: speculative (inactive unless the velocity would
+        // cross the limit within this step) while inside the range.
+        rb.add(sa, sb, Vec3::Zero(), -axisWorld, axisWorld,
+               oneSidedBias(toLower, settings_.limitErp, invH), 0.0f, kInf, *lowStore, true);
+        m.rows.back().store = lowStore;
+        rb.add(sa, sb, Vec3::Zero(), axisWorld, -axisWorld,
+               oneSidedBias(toUpper, settings_.limitErp, invH), 0.0f, kInf, *upStore, true);
+        m.rows.back().store = upStore;
+      }
+    } else {
+      std::fill(store + 3, store + kJointImpulses, 0.0f);
+    }
+  }
+  m.jointPositions.clear();
+  for (std::size_t ji = 0; ji < m.joints.size(); ++ji) {
+    const JointConfig& j = m.joints[ji];
+    const auto pa = static_cast<std::size_t>(j.def.parent), pb = static_cast<std::size_t>(j.def.child);
+    const int sa = slotOf(pa), sb = slotOf(pb);
+    if (sa == sb) continue;
+    float* store = &s.jointImpulse[ji * kJointImpulses];
+    Vec3 worldA, worldB;
+    const Vec3 rA = armOf(pa, j.comAnchorParent, &worldA);
+    const Vec3 rB = armOf(pb, j.comAnchorChild, &worldB);
+    const Vec3 c = worldB - worldA;
+    m.jointPositions.push_back({sa, sb, m.slotOrientation[static_cast<std::size_t>(sa)].conjugate() * rA,
+                                m.slotOrientation[static_cast<std::size_t>(sb)].conjugate() * rB});
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = Vec3::Unit(k);
+      rb.add(sa, sb, e, -rA.cross(e), rB.cross(e), twoSidedBias(c[k], settings_.jointErp, invH),
+             -kInf, kInf, store[k], true);
+      m.rows.back().store = store + k;
+    }
+  }
+
+  // Surface rows (SoA, one body each).
+  const std::size_t surfCount = rows_.body.size();
+  m.surfSlot.resize(surfCount);
+  m.surfAng.resize(surfCount);
+  m.surfInvIAng.resize(surfCount);
+  m.surfInvMass.resize(surfCount);
+  m.surfEffMass.resize(surfCount);
+  m.surfBias.resize(surfCount);
+  m.surfRelaxBias.resize(surfCount);
+  for (std::size_t i = 0; i < surfCount; ++i) {
+    const auto body = static_cast<std::size_t>(rows_.body[i]);
+    assert(body < n && "surface row: bad body");
+    const int slot = slotOf(body);
+    const SolverBody& b = m.solverBodies[static_cast<std::size_t>(slot)];
+    Vec3 world;
+    const Vec3 r = armOf(body, rows_.anchor[i] - m.bodies[body].centroid, &world);
+    const Vec3& nrm = rows_.normal[i];
+    const Vec3 ang = r.cross(nrm);
+    const Vec3 invIAng = applyInvInertia(b, ang);
+    const float k = b.invMass * nrm.squaredNorm() + ang.dot(invIAng);
+    const float c = nrm.dot(world - rows_.target[i]);
+    const Bias bias = rows_.lower[i] >= 0.0f ? oneSidedBias(c, settings_.surfaceErp, invH)
+                                             : twoSidedBias(c, settings_.surfaceErp, invH);
+    m.surfSlot[i] = slot;
+    m.surfAng[i] = ang;
+    m.surfInvIAng[i] = invIAng;
+    m.surfInvMass[i] = b.invMass;
+    m.surfEffMass[i] = k > 0.0f ? 1.0f / k : 0.0f;
+    m.surfBias[i] = bias.solve;
+    m.surfRelaxBias[i] = bias.relax;
+    rows_.impulse[i] = 0.0f;
+  }
+
+  // --- Warm start, solve with bias, integrate positions, relax. ---
+  for (const Row& r : m.rows) {
+    if (r.impulse != 0.0f) applyRowImpulse(m.solverBodies, r, r.impulse);
+  }
+  for (int it = 0; it < settings_.iterations; ++it) {
+    solveSurfaceRows(m.solverBodies, m, rows_, true);
+    solveRows(m.solverBodies, m.rows, true);
+  }
+  for (std::size_t slot = 0; slot + 1 < slotCount; ++slot) {
+    const SolverBody& b = m.solverBodies[slot];
+    Quat& q = m.slotOrientation[slot];
+    m.slotPosition[slot] += h * b.v;
+    // Linearised rotation is meaningless beyond a quarter turn per step: clamp (Box2D does too).
+    Vec3 rot = h * b.w;
+    const float angle = rot.norm();
+    if (angle > kMaxRotationPerStep) {
+      rot *= kMaxRotationPerStep / angle;
+      m.solverBodies[slot].w *= kMaxRotationPerStep / angle;
+    }
+    const Quat dq(0.0f, 0.5f * rot.x(), 0.5f * rot.y(), 0.5f * rot.z());
+    q.coeffs() += (dq * q).coeffs();
+    q.normalize();
+  }
+  projectJointPositions(m, settings_.positionIterations);
+  for (int it = 0; it < settings_.relaxIterations; ++it) {
+    solveSurfaceRows(m.solverBodies, m, rows_, false);
+    solveRows(m.solverBodies, m.rows, false);
+  }
+  for (const Row& r : m.rows) {
+    if (r.store) *r.store = r.impulse;
+  }
+  storeContactImpulses();
+
+  // --- Write back: free bodies from their slots, welded members from their group. ---
+  for (std::size_t i = 0; i < n; ++i) {
+    if (s.group[i] >= 0 || m.bodies[i].type == BodyType::Static) continue;
+    s.position[i] = m.slotPosition[i];
+    s.orientation[i] = m.slotOrientation[i];
+    s.linearVelocity[i] = m.solverBodies[i].v;
+    s.angularVelocity[i] = m.solverBodies[i].w;
+  }
+  for (std::size_t g = 0; g < groupCount; ++g) {
+    WorldState::Group& grp = s.groups[g];
+    if (!grp.alive) continue;
+    grp.position = m.slotPosition[n + g];
+    grp.orientation = m.slotOrientation[n + g];
+    grp.linearVelocity = m.solverBodies[n + g].v;
+    grp.angularVelocity = m.solverBodies[n + g].w;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const int g = s.group[i];
+    if (g < 0) continue;
+    const WorldState::Group& grp = s.groups[static_cast<std::size_t>(g)];
+    s.position[i] = grp.position + grp.orientation * s.memberOffset[i];
+    s.orientation[i] = (grp.orientation * s.memberRotation[i]).normalized();
+    s.linearVelocity[i] = grp.linearVelocity + grp.angularVelocity.cross(s.position[i] - grp.position);
+    s.angularVelocity[i] = grp.angularVelocity;
+  }
+  ++s.stepCount;
+}
+
+}  // namespace dynahand::physics

@@ -1,0 +1,15 @@
+// Counts global operator new calls in scope (replacement operators in alloc_counter.cpp).
+#pragma once
+
+namespace dynahand::test {
+
+class AllocationCounter {
+ public:
+  AllocationCounter();
+  ~AllocationCounter();
+  AllocationCounter(const AllocationCounter&) = delete;
+  AllocationCounter& operator=(const AllocationCounter&) = delete;
+  long count() const;  // allocations since construction
+};
+
+}  // namespace dynahand::test

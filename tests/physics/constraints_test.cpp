@@ -1,0 +1,273 @@
+// Constraint rows: limits, drives, cones, the tracker's surface / line-of-sight / boundary rows.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "dynahand/physics_world.h"
+#include "physics/physics_scenes.h"
+
+namespace dynahand::physics {
+namespace {
+
+constexpr float kDt = 1.0f / 60.0f;
+constexpr float kDeg = 0.017453293f;
+
+struct Hinge {
+  World world;
+  BodyId parent, child;
+  JointId joint;
+};
+
+// A static parent and a finger-bone child joined at the child's base; joint X along the bone.
+Hinge makeJointScene(const Vec3& lower, const Vec3& upper) {
+  WorldSettings settings;
+  Hinge h{World(settings), 0, 0, 0};
+  const int bone = h.world.addShape(scenes::bonePrism(0.04f, 0.009f, 0.008f));
+  BodyDef p;
+  p.shape = bone;
+  p.type = BodyType::Static;
+  p.pose.p = Vec3(-0.04f, 0, 0);
+  h.parent = h.world.addBody(p);
+  BodyDef c;
+  c.shape = bone;
+  c.angularDamping = 2.0f;
+  h.child = h.world.addBody(c);
+  JointDef j;
+  j.parent = h.parent;
+  j.child = h.child;
+  j.anchorParent = Vec3(0.04f, 0, 0);
+  j.limitsEnabled = true;
+  j.lower = lower;
+  j.upper = upper;
+  h.joint = h.world.addJoint(j);
+  return h;
+}
+
+// Drive angles past their limits with a strong motor (5 N m on a 1 kg bone). While the drive
+// keeps pushing (after the first second) every limit holds within 0.5 deg; arriving at the
+// limit overshoots by at most 3 deg (linearised angles over one step).
+TEST(JointLimits, HoldWithinHalfDegreeWhileDrivePushesPast) {
+  const Vec3 lower(-0.3f, -0.2f, -0.1f), upper(1.2f, 0.25f, 0.15f);
+  const std::vector<Vec3> targets = {Vec3(2.0f, 0, 0),  Vec3(-1.0f, 0, 0),   Vec3(0, 0.6f, 0),
+                                     Vec3(0, -0.6f, 0), Vec3(0, 0, 0.5f),    Vec3(0, 0, -0.5f),
+                                     Vec3(1.6f, 0.5f, 0), Vec3(1.6f, 0, 0.4f), Vec3(-1.0f, -0.5f, 0)};
+  for (const Vec3& target : targets) {
+    Hinge h = makeJointScene(lower, upper);
+    h.world.setJointDrive(h.joint, composeJointRotation(target), 5.0f, 0.1f);
+    float transient = 0.0f, held = 0.0f;
+    for (int i = 0; i < 180; ++i) {
+      h.world.step(kDt);
+      const Vec3 a = h.world.jointAngles(h.joint);
+      for (int k = 0; k < 3; ++k) {
+        const float violation = std::max(lower[k] - a[k], a[k] - upper[k]);
+        transient = std::max(transient, violation);
+        if (i >= 60) held = std::max(held, violation);
+      }
+    }
+    EXPECT_LT(held, 0.5f * kDeg) << "target " << target.transpose();
+    EXPECT_LT(transient, 3.0f * kDeg) << "target " << target.transpose();
+    // A single-axis drive did push the joint to the limit it aims past.
+    const Vec3 a = h.world.jointAngles(h.joint);
+    const bool singleAxis = (target.array() != 0.0f).count() == 1;
+    for (int k = 0; k < 3 && singleAxis; ++k) {
+      if (target[k] > upper[k]) {
+        EXPECT_GT(a[k], upper[k] - 1.0f * kDeg) << k;
+      }
+      if (target[k] < lower[k]) {
+        EXPECT_LT(a[k], lower[k] + 1.0f * kDeg) << k;
+      }
+    }
+    EXPECT_LT(h.world.jointSeparation(h.joint), 1e-4f);
+  }
+}
+
+TEST(JointDrive, ReachesTargetInsideLimits) {
+  Hinge h = makeJointScene(Vec3(-1, -1, -1), Vec3(1, 1, 1));
+  const Vec3 target(0.5f, -0.2f, 0.1f);
+  h.world.setJointDrive(h.joint, composeJointRotation(target), 2.0f, 0.05f);
+  for (int i = 0; i < 120; ++i) h.world.step(kDt);
+  EXPECT_LT((h.world.jointAngles(h.joint) - target).norm(), 1.0f * kDeg);
+}
+
+TEST(JointDrive, TorqueLimitBoundsTheMotion) {
+  // A tiny torque cannot turn the bone far in a short time: |angle| <= 1/2 (tau/I) t^2.
+  Hinge h = makeJointScene(Vec3(-2, -1, -1), Vec3(2, 1, 1));
+  h.world.setDamping(h.child, 0.0f, 0.0f);
+  const float torque = 1e-4f;
+  h.world.setJointDrive(h.joint, composeJointRotation(Vec3(1.5f, 0, 0)), torque);
+  const int steps = 10;
+  for (int i = 0; i < steps; ++i) h.world.step(kDt);
+  // Moment of inertia about the joint (at the bone's end) along the flexion axis.
+  const ConvexShape& s = h.world.bodyShape(h.child);
+  const Vec3 c = s.centroid();
+  const float inertia = s.inertiaAboutCentroid(1.0f)(2, 2) + c.x() * c.x() + c.y() * c.y();
+  const float t = steps * kDt;
+  const float bound = 0.5f * torque / inertia * t * t;
+  EXPECT_LT(h.world.jointAngles(h.joint).x(), bound * 1.2f);
+  EXPECT_GT(h.world.jointAngles(h.joint).x(), 0.3f * bound);
+}
+
+TEST(AngularCone, KeepsAxesWithinTenDegrees) {
+  Hinge h = makeJointScene(Vec3(-2, -1, -1), Vec3(2, 1, 1));
+  const float maxAngle = 10.0f * kDeg;
+  h.world.addAngularCone(h.parent, Vec3::UnitX(), h.child, Vec3::UnitX(), maxAngle);
+  h.world.setJointDrive(h.joint, composeJointRotation(Vec3(0.8f, 0.3f, 0)), 5.0f, 0.1f);
+  float worst = 0.0f;
+  for (int i = 0; i < 120; ++i) {
+    h.world.step(kDt);
+    const Vec3 u = h.world.pose(h.parent).rotate(Vec3::UnitX());
+    const Vec3 v = h.world.pose(h.child).rotate(Vec3::UnitX());
+    worst = std::max(worst, std::acos(std::clamp(u.dot(v), -1.0f, 1.0f)));
+  }
+  EXPECT_LT(worst, maxAngle + 0.5f * kDeg);
+  EXPECT_GT(worst, maxAngle - 1.0f * kDeg);  // the drive pushed it to the cone
+}
+
+TEST(AngularCone, DisabledConeDoesNotAct) {
+  Hinge h = makeJointScene(Vec3(-2, -1, -1), Vec3(2, 1, 1));
+  const ConeId cone = h.world.addAngularCone(h.parent, Vec3::UnitX(), h.child, Vec3::UnitX(), 0.1f);
+  h.world.setConeEnabled(cone, false);
+  h.world.setJointDrive(h.joint, composeJointRotation(Vec3(0.8f, 0, 0)), 5.0f, 0.05f);
+  for (int i = 0; i < 120; ++i) h.world.step(kDt);
+  EXPECT_NEAR(h.world.jointAngles(h.joint).x(), 0.8f, 1.0f * kDeg);
+}
+
+World freeBoxWorld(BodyId* body) {
+  World w;
+  const int box = w.addShape(ConvexShape::box(Vec3(0.02f, 0.02f, 0.02f)));
+  BodyDef d;
+  d.shape = box;
+  *body = w.addBody(d);
+  return w;
+}
+
+TEST(SurfaceRows, AccumulatedImpulseNeverExceedsCap) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  w.reserveRows(64);
+  const float cap = 0.002f;  // N s
+  const int steps = 30, rowCount = 40;
+  for (int step = 0; step < steps; ++step) {
+    w.rows().clear();
+    for (int i = 0; i < rowCount; ++i) {
+      const Vec3 anchor(0.02f, 0.01f * static_cast<float>(i % 3) - 0.01f, 0.0f);
+      // Targets far away: every row wants more than its cap.
+      w.rows().addSurface(b, anchor, Vec3::UnitX(), Vec3(1.0f, 0, 0), cap);
+    }
+    w.step(kDt);
+    for (float imp : w.rows().impulse) {
+      EXPECT_LE(std::abs(imp), cap * (1.0f + 1e-6f));
+    }
+  }
+  // Per step the capped rows can give the 1 kg box at most rowCount x cap of momentum, and the
+  // far target keeps them saturated during the biased sweeps: x ~ steps x dt x rowCount x cap.
+  const float reach = steps * kDt * rowCount * cap;
+  EXPECT_LE(w.pose(b).p.x(), reach * 1.001f);
+  EXPECT_GT(w.pose(b).p.x(), 0.9f * reach);
+}
+
+TEST(SurfaceRows, MajorityOverpowersOutliers) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  w.setDamping(b, dampingFromRetention(0.8f, kDt), dampingFromRetention(0.8f, kDt));
+  const Vec3 shift(0.01f, -0.005f, 0.003f);  // where the data says the box is
+  const float cap = 0.01f;
+  const ConvexShape& s = w.bodyShape(b);
+  scenes::Rng rng(5);
+  std::vector<Vec3> anchors;
+  std::vector<int> faces;
+  for (int i = 0; i < 120; ++i) {
+    Vec3 p;
+    int f = 0;
+    s.query(Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * 0.05f, &p, &f);
+    anchors.push_back(p);
+    faces.push_back(f);
+  }
+  for (int step = 0; step < 120; ++step) {
+    w.rows().clear();
+    for (std::size_t i = 0; i < anchors.size(); ++i) {
+      const Vec3 n = w.pose(b).rotate(s.faces()[static_cast<std::size_t>(faces[i])].normal);
+      const bool outlier = i % 10 == 0;  // 10% pull 5 cm the other way
+      const Vec3 target = anchors[i] + (outlier ? Vec3(-0.05f, 0.04f, 0.0f) : shift);
+      w.rows().addSurface(b, anchors[i], n, target, cap);
+    }
+    w.step(kDt);
+  }
+  EXPECT_LT((w.pose(b).p - shift).norm(), 1e-3f) << w.pose(b).p.transpose();
+  EXPECT_LT(Eigen::AngleAxisf(w.pose(b).q).angle(), 2.0f * kDeg);
+}
+
+TEST(SurfaceRows, PullsBodyPointOntoTarget) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  for (int step = 0; step < 60; ++step) {
+    w.rows().clear();
+    w.rows().addSurface(b, Vec3(0.02f, 0, 0), Vec3::UnitX(), Vec3(0.05f, 0, 0), 1.0f);
+    w.step(kDt);
+  }
+  EXPECT_NEAR(w.pose(b).transform(Vec3(0.02f, 0, 0)).x(), 0.05f, 1e-4f);
+}
+
+TEST(LineOfSight, PushesOnlyWhenInFrontOfTheObservedPoint) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  const Vec3 ray = Vec3::UnitZ();  // camera looks along +z
+  // The body's front point is at z = -0.02; the observed surface is at z = 0.01: the body is
+  // in front of data, i.e. in free space, and must be pushed back behind it.
+  for (int step = 0; step < 60; ++step) {
+    w.rows().clear();
+    w.rows().addLineOfSight(b, Vec3(0, 0, -0.02f), ray, Vec3(0, 0, 0.01f), 1.0f);
+    w.step(kDt);
+    EXPECT_GE(w.rows().impulse[0], 0.0f);
+  }
+  EXPECT_GE(w.pose(b).transform(Vec3(0, 0, -0.02f)).z(), 0.01f - 1e-4f);
+  // Behind the target already: the row does nothing.
+  World w2 = freeBoxWorld(&b);
+  w2.rows().addLineOfSight(b, Vec3(0, 0, -0.02f), ray, Vec3(0, 0, -0.05f), 1.0f);
+  w2.step(kDt);
+  EXPECT_EQ(w2.rows().impulse[0], 0.0f);
+  EXPECT_EQ(w2.pose(b).p, Vec3::Zero());
+}
+
+TEST(BoundaryPlane, KeepsExtremePointOnAllowedSide) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  w.setVelocity(b, Vec3(0, 0.5f, 0), Vec3(0, 0, 3.0f));  // heading into the plane, spinning
+  const Vec3 n(0, -1, 0);  // allowed side: y <= 0.05
+  const float offset = -0.05f;
+  float worst = 0.0f;
+  for (int step = 0; step < 120; ++step) {
+    w.rows().clear();
+    w.addBoundary(b, n, offset, 1.0f);
+    w.step(kDt);
+    for (const Vec3& v : w.bodyShape(b).vertices()) {
+      worst = std::max(worst, w.pose(b).transform(v).y() - 0.05f);
+    }
+  }
+  EXPECT_LT(worst, 1e-3f);
+}
+
+TEST(BodyDrive, ReachesTargetPoseWithinLimits) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  const Pose target{Vec3(0.05f, -0.02f, 0.01f), Quat(Eigen::AngleAxisf(0.5f, Vec3(0, 1, 1).normalized()))};
+  w.setBodyDrive(b, target, 10.0f, 0.1f, 0.05f);
+  for (int i = 0; i < 120; ++i) w.step(kDt);
+  EXPECT_LT((w.pose(b).p - target.p).norm(), 1e-4f);
+  EXPECT_LT(target.q.angularDistance(w.pose(b).q), 0.5f * kDeg);
+}
+
+TEST(BodyDrive, ForceLimitBoundsAcceleration) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  const float maxForce = 0.5f;  // N on 1 kg: at most 0.5 m/s^2
+  w.setBodyDrive(b, Pose{Vec3(1, 0, 0), Quat::Identity()}, maxForce, 1.0f);
+  for (int i = 0; i < 30; ++i) w.step(kDt);
+  const float t = 30 * kDt;
+  EXPECT_LE(w.linearVelocity(b).x(), maxForce * t * 1.0001f);
+  EXPECT_GT(w.linearVelocity(b).x(), 0.9f * maxForce * t);
+}
+
+}  // namespace
+}  // namespace dynahand::physics

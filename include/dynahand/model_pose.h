@@ -37,12 +37,14 @@ bool withinLimits(const ArticulatedModel& model, const JointAngles& angles,
                   float tolerance = 1e-5f);
 
 // The joint rotation of (flexion, abduction, twist), rad, and its inverse (|abduction| < pi/2).
-// The physics convention (physics_angles.h) in the model's joint axes (+z along the child
-// bone, +x the flexion axis, +y dorsal): the bone direction is
-//   d = (-sin(abduction), -cos(abduction) sin(flexion), cos(abduction) cos(flexion)),
+// Swing-twist in the model's joint axes (+z along the child bone, +x the flexion axis, +y
+// dorsal): the bone direction is
+//   d = (sin(abduction), -cos(abduction) sin(flexion), cos(abduction) cos(flexion)),
 // the rotation is the shortest swing z -> d followed by the twist about z. Pure flexion is a
-// rotation about +x (the bone turns toward -y, the palm); pure abduction one about -y (the
-// bone turns toward -x: ulnar for a right hand); pure twist one about +z.
+// rotation about +x (the bone turns toward -y, the palm); pure abduction one about +y (the
+// bone turns toward +x: the thumb side of a right hand); pure twist one about +z. This is the
+// physics convention (physics_angles.h) with angles (f, -a, t) in the joint frame whose
+// physics axes X, Y, Z are the model's z, -y, x.
 Quat jointRotation(const Vec3& angles);
 Vec3 jointRotationAngles(const Quat& rotation);
 

@@ -5,7 +5,7 @@
 // are fractions of W. Body frames: origin at the joint with the parent, +z distal along the
 // bone, +y dorsal (out of the back of the hand), +x radial (toward the thumb) for a right
 // hand. Joint angles (model_pose.h): flexion about +x bends toward the palm, abduction is
-// positive toward the ulnar side (-x), twist is about the bone. Finger bones are convex hulls of two spheres (tapered capsules) centred on their
+// positive toward +x (the thumb side of a right hand), twist is about the bone. Finger bones are convex hulls of two spheres (tapered capsules) centred on their
 // joints, so neighbours share a ball around every joint and never show a gap.
 #include <array>
 #include <cassert>
@@ -135,7 +135,7 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
     }
     addBody("palm", std::move(points));
   }
-  addJoint("forearm", "palm", Vec3::Zero(), Quat::Identity(), degrees(-70, -20, 0), degrees(80, 35, 0));
+  addJoint("forearm", "palm", Vec3::Zero(), Quat::Identity(), degrees(-70, -35, 0), degrees(80, 20, 0));
 
   // Wrist and palm keypoints (MediaPipe wrist = the wrist joint centre).
   addKeypoint("wrist", "palm", Vec3::Zero(), 0.19f * W);
@@ -164,8 +164,8 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
       addKeypoint(keys[i], names[i], Vec3::Zero(), radii[i]);
     }
     addKeypoint(keys[3], names[2], Vec3(0, 0, lengths[2]), radii[3]);
-    addJoint("palm", names[0], cmc, restFrame, degrees(-20, -40, -20), degrees(55, 30, 30));
-    addJoint(names[0], names[1], Vec3(0, 0, lengths[0]), Quat::Identity(), degrees(-10, -15, -5), degrees(60, 10, 5));
+    addJoint("palm", names[0], cmc, restFrame, degrees(-20, -30, -20), degrees(55, 40, 30));
+    addJoint(names[0], names[1], Vec3(0, 0, lengths[0]), Quat::Identity(), degrees(-10, -10, -5), degrees(60, 15, 5));
     addJoint(names[1], names[2], Vec3(0, 0, lengths[1]), Quat::Identity(), degrees(-15, 0, 0), degrees(85, 0, 0));
   }
 
@@ -186,9 +186,8 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
     addKeypoint(n + "_cmc", "palm", Vec3(0.6f * mcp[f].x(), mcp[f].y(), 0.2f * mcp[f].z()), 0.8f * base);
 
     const Quat splay(Eigen::AngleAxisf(finger.splayDeg * kDeg, Vec3::UnitY()));
-    // Joint abduction is positive toward the ulnar side (-x): the table's radial range flips.
-    addJoint("palm", n + "_proximal", mcp[f], splay, degrees(-25, -finger.maxAbductionDeg, -5),
-             degrees(95, -finger.minAbductionDeg, 5));
+    addJoint("palm", n + "_proximal", mcp[f], splay, degrees(-25, finger.minAbductionDeg, -5),
+             degrees(95, finger.maxAbductionDeg, 5));
     addJoint(n + "_proximal", n + "_middle", Vec3(0, 0, finger.lengths[0] * L), Quat::Identity(), degrees(-5, 0, 0),
              degrees(110, 0, 0));
     addJoint(n + "_middle", n + "_distal", Vec3(0, 0, finger.lengths[1] * L), Quat::Identity(), degrees(-10, 0, 0),

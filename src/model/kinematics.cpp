@@ -1,8 +1,8 @@
 // Forward kinematics and its inverse (angles from orientations), limits, interpolation.
-// Joint angles follow the physics convention (physics_angles.h: swing-twist, flexion =
-// atan2 of the bone direction, abduction = its elevation, twist about the bone), expressed in
-// the model's joint axes (bone +z, flexion about +x); singular only at |abduction| = 90
-// degrees, which the limits exclude.
+// Joint angles follow the physics swing-twist convention (physics_angles.h) expressed in the
+// model's joint axes (bone +z, flexion about +x, abduction toward +x); model angles
+// (f, a, t) are physics angles (f, -a, t) in the joint frame rotated by (z, -y, x). Singular
+// only at |abduction| = 90 degrees, which the limits exclude.
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -39,11 +39,12 @@ bool withinLimits(const ArticulatedModel& model, const JointAngles& angles, floa
 }
 
 Quat jointRotation(const Vec3& angles) {
-  // physics::composeJointRotation in the model's axes (physics X, Y, Z = model z, -y, x):
-  // the bone direction d from flexion and abduction, the shortest swing z -> d, then the twist.
+  // physics::composeJointRotation(flexion, -abduction, twist) in the model's axes (physics
+  // X, Y, Z = model z, -y, x): the bone direction d from flexion and abduction, the shortest
+  // swing z -> d, then the twist about the bone.
   const float f = angles.x();
   const float a = angles.y();
-  const Vec3 d(-std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
+  const Vec3 d(std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
   const Quat swing = Quat::FromTwoVectors(Vec3::UnitZ(), d);
   const Quat twist(std::cos(0.5f * angles.z()), 0.0f, 0.0f, std::sin(0.5f * angles.z()));
   return (swing * twist).normalized();
@@ -53,7 +54,7 @@ Vec3 jointRotationAngles(const Quat& rotation) {
   const Quat q = rotation.normalized();
   const Vec3 d = q * Vec3::UnitZ();
   const float flexion = std::atan2(-d.y(), d.z());
-  const float abduction = std::asin(std::clamp(-d.x(), -1.0f, 1.0f));
+  const float abduction = std::asin(std::clamp(d.x(), -1.0f, 1.0f));
   const Quat twist = Quat::FromTwoVectors(Vec3::UnitZ(), d).conjugate() * q;
   float angle = 2.0f * std::atan2(twist.z(), twist.w());
   constexpr float kPi = std::numbers::pi_v<float>;

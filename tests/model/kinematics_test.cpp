@@ -26,15 +26,15 @@ TEST(Kinematics, JointRotationIsSwingTwistInModelAxes) {
   // Pure flexion: about +x; the bone (+z) turns toward -y (the palm side).
   EXPECT_LT(angleBetween(jointRotation(Vec3(0.7f, 0, 0)), Quat(Eigen::AngleAxisf(0.7f, Vec3::UnitX()))), 1e-6f);
   EXPECT_LT((jointRotation(Vec3(kHalfPi, 0, 0)) * Vec3::UnitZ() - Vec3(0, -1, 0)).norm(), 1e-6f);
-  // Pure abduction: about -y; the bone turns toward -x.
-  EXPECT_LT(angleBetween(jointRotation(Vec3(0, 0.4f, 0)), Quat(Eigen::AngleAxisf(0.4f, -Vec3::UnitY()))), 1e-6f);
+  // Pure abduction: about +y; the bone turns toward +x (the thumb side of a right hand).
+  EXPECT_LT(angleBetween(jointRotation(Vec3(0, 0.4f, 0)), Quat(Eigen::AngleAxisf(0.4f, Vec3::UnitY()))), 1e-6f);
   // Pure twist: about +z.
   EXPECT_LT(angleBetween(jointRotation(Vec3(0, 0, 0.9f)), Quat(Eigen::AngleAxisf(0.9f, Vec3::UnitZ()))), 1e-6f);
-  // Combined: the bone direction is (-sin a, -cos a sin f, cos a cos f) whatever the twist,
+  // Combined: the bone direction is (sin a, -cos a sin f, cos a cos f) whatever the twist,
   // and the twist is a rotation about the bone after the shortest swing.
   const float f = 1.2f, a = -0.35f, t = 0.5f;
   const Quat r = jointRotation(Vec3(f, a, t));
-  const Vec3 d(-std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
+  const Vec3 d(std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
   EXPECT_LT((r * Vec3::UnitZ() - d).norm(), 1e-6f);
   const Quat swing = Quat::FromTwoVectors(Vec3::UnitZ(), d);
   EXPECT_LT(angleBetween(r, swing * Quat(Eigen::AngleAxisf(t, Vec3::UnitZ()))), 1e-6f);

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cctype>
 #include <fstream>
+#include <limits>
 
 #include "sensor/camera_json.h"
 #include "sensor/frame_source.h"
@@ -190,12 +191,15 @@ Result<OpenedSource> openIntelRaw(const fs::path& rsFile, const fs::path& jsonFi
   if (ec) return Error{rsFile.string() + ": cannot read the file size: " + ec.message()};
   if (auto ok = checkRawSize(size, camera->intrinsics, rsFile.string()); !ok) return ok.error();
 
+  const std::uintmax_t frames = size / (static_cast<std::uintmax_t>(camera->intrinsics.width) *
+                                        camera->intrinsics.height * 2);
+  if (frames > static_cast<std::uintmax_t>(std::numeric_limits<int>::max())) {
+    return Error{rsFile.string() + ": too many frames (" + std::to_string(frames) + ")"};
+  }
   OpenedSource opened;
   opened.info.intrinsics = camera->intrinsics;
   opened.info.depthScale = camera->depthScale;
-  opened.info.frameCount =
-      static_cast<int>(size / (static_cast<std::uintmax_t>(camera->intrinsics.width) *
-                               camera->intrinsics.height * 2));
+  opened.info.frameCount = static_cast<int>(frames);
   opened.info.format = "intel-rs";
   opened.info.path = rsFile;
   opened.source = std::make_unique<IntelRawSource>(rsFile, opened.info);

@@ -66,6 +66,8 @@ struct CloudPipeline::Impl {
 
 CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& config)
     : impl_(std::make_unique<Impl>(intrinsics, config)) {
+  // Region growing packs cell coordinates into 16 bits each.
+  assert(intrinsics.width < 32768 && intrinsics.height < 32768 && "image too large");
   assert(intrinsics.width > 0 && intrinsics.height > 0 && intrinsics.fx > 0.0f &&
          intrinsics.fy > 0.0f && "intrinsics must be valid");
   const SegmentationConfig& s = config.segmentation;
@@ -76,8 +78,8 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
   const auto coarseCells = static_cast<std::size_t>(intrinsics.width / impl_->coarseStep + 1) *
                            static_cast<std::size_t>(intrinsics.height / impl_->coarseStep + 1);
   impl_->filterScratch.reserve(pixels);
-  impl_->coarseGrower.reserve(coarseCells);
-  impl_->fineGrower.reserve(pixels);
+  impl_->coarseGrower.reserve(coarseCells, intrinsics.width, intrinsics.height);
+  impl_->fineGrower.reserve(pixels, intrinsics.width, intrinsics.height);
   impl_->coarseDepth.reserve(coarseCells);
   impl_->coarseNear.reserve(coarseCells);
   impl_->boxColumnCell.reserve(static_cast<std::size_t>(intrinsics.width));

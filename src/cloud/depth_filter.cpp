@@ -34,27 +34,38 @@ void removeFlyingPixels(const std::vector<float>& in, int w, int h, const DepthS
                         float fx, float fy, std::vector<float>& out) {
   const float spacingX = 1.0f / fx;
   const float spacingY = 1.0f / fy;
-  for (int v = 0; v < h; ++v) {
+  // An invalid neighbour (0) differs by z: a cut whenever z > limit. z = 0 stays 0.
+  const auto generic = [&](int u, int v) {
     const float* row = in.data() + static_cast<std::size_t>(v) * w;
-    const float* up = v > 0 ? row - w : nullptr;
-    const float* down = v + 1 < h ? row + w : nullptr;
+    const float z = row[u];
+    const float limitX = maxDepthStep(rule, z, spacingX);
+    const float limitY = maxDepthStep(rule, z, spacingY);
+    const bool cutLeft = u > 0 && std::fabs(row[u - 1] - z) > limitX;
+    const bool cutRight = u + 1 < w && std::fabs(row[u + 1] - z) > limitX;
+    const bool cutUp = v > 0 && std::fabs(row[u - w] - z) > limitY;
+    const bool cutDown = v + 1 < h && std::fabs(row[u + w] - z) > limitY;
+    return (cutLeft && cutRight) || (cutUp && cutDown) ? 0.0f : z;
+  };
+  for (int v = 0; v < h; ++v) {
     float* dst = out.data() + static_cast<std::size_t>(v) * w;
-    for (int u = 0; u < w; ++u) {
+    if (v == 0 || v + 1 == h || w < 3) {
+      for (int u = 0; u < w; ++u) dst[u] = generic(u, v);
+      continue;
+    }
+    const float* row = in.data() + static_cast<std::size_t>(v) * w;
+    const float* up = row - w;
+    const float* down = row + w;
+    dst[0] = generic(0, v);
+    // Interior: no bounds tests, no branches (the compiler can vectorise this).
+    for (int u = 1; u + 1 < w; ++u) {
       const float z = row[u];
-      if (z == 0.0f) {
-        dst[u] = 0.0f;
-        continue;
-      }
       const float limitX = maxDepthStep(rule, z, spacingX);
       const float limitY = maxDepthStep(rule, z, spacingY);
-      // An invalid neighbour (0) differs by z, a cut whenever z > limit.
-      const auto cut = [z](float n, float limit) { return std::fabs(n - z) > limit; };
-      const bool cutLeft = u > 0 && cut(row[u - 1], limitX);
-      const bool cutRight = u + 1 < w && cut(row[u + 1], limitX);
-      const bool cutUp = up && cut(up[u], limitY);
-      const bool cutDown = down && cut(down[u], limitY);
-      dst[u] = (cutLeft && cutRight) || (cutUp && cutDown) ? 0.0f : z;
+      const bool cutX = (std::fabs(row[u - 1] - z) > limitX) & (std::fabs(row[u + 1] - z) > limitX);
+      const bool cutY = (std::fabs(up[u] - z) > limitY) & (std::fabs(down[u] - z) > limitY);
+      dst[u] = cutX | cutY ? 0.0f : z;
     }
+    dst[w - 1] = generic(w - 1, v);
   }
 }
 

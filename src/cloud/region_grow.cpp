@@ -9,7 +9,9 @@
 
 namespace dynahand::cloud {
 
-void RegionGrower::reserve(std::size_t cells) {
+void RegionGrower::reserve(std::size_t cells, int maxWidth, int maxHeight) {
+  columnX_.reserve(static_cast<std::size_t>(maxWidth));
+  rowY_.reserve(static_cast<std::size_t>(maxHeight));
   labels_.reserve(cells);
   visited_.reserve(cells);
   queue_.reserve(cells);
@@ -24,6 +26,17 @@ void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
   visited_.assign(cells, 0);
   attempt_ = 0;
   queue_.resize(cells);
+  // Normalised image coordinates of each grid column / row: x = columnX[i] * z.
+  columnX_.resize(static_cast<std::size_t>(grid.width));
+  rowY_.resize(static_cast<std::size_t>(grid.height));
+  for (int i = 0; i < grid.width; ++i) {
+    columnX_[static_cast<std::size_t>(i)] =
+        (static_cast<float>(grid.originU + i * grid.step) - k.cx) / k.fx;
+  }
+  for (int j = 0; j < grid.height; ++j) {
+    rowY_[static_cast<std::size_t>(j)] =
+        (static_cast<float>(grid.originV + j * grid.step) - k.cy) / k.fy;
+  }
   regionEnd_ = 0;
   cutBegin_ = static_cast<int>(cells);
 }
@@ -56,18 +69,15 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   const int w = grid_.width;
   const int h = grid_.height;
   const float* depth = grid_.depth;
+  std::uint8_t* visited = visited_.data();
+  const std::uint8_t* labels = labels_.data();
+  const float* columnX = columnX_.data();
+  const float* rowY = rowY_.data();
   const auto step = static_cast<float>(grid_.step);
   const float spacingX = step / k_.fx;  // lateral m per m of depth between neighbours
   const float spacingY = step / k_.fy;
   const float areaPerZ2 = spacingX * spacingY;
   const float radius2 = radiusM * radiusM;
-  // Deprojection without a divide: x = (u - cx) * z / fx.
-  const float invFx = 1.0f / k_.fx;
-  const float invFy = 1.0f / k_.fy;
-  const auto pointAt = [&](int i, int j, float z) {
-    return Vec3((static_cast<float>(grid_.originU + i * grid_.step) - k_.cx) * invFx * z,
-                (static_cast<float>(grid_.originV + j * grid_.step) - k_.cy) * invFy * z, z);
-  };
 
   ++attempt_;
   if (attempt_ == 0) {  // stamp wrap-around: wipe once
@@ -75,56 +85,66 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
     attempt_ = 1;
   }
   const std::uint8_t stamp = attempt_;
-  GrownRegion r;
   const int seedI = seed % w;
   const int seedJ = seed / w;
-  r.nearestPoint = pointAt(seedI, seedJ, depth[seed]);
-  r.minI = r.maxI = seedI;
-  r.minJ = r.maxJ = seedJ;
+  const float seedZ = depth[seed];
+  const Vec3 nearest(columnX[seedI] * seedZ, rowY[seedJ] * seedZ, seedZ);
 
-  int* queue = queue_.data();
+  // Accumulators in locals (registers), written to the result once at the end.
+  Vec3 pointSum = Vec3::Zero();
+  float iSum = 0.0f;
+  float jSum = 0.0f;
+  float areaZ2 = 0.0f;
+  int minI = seedI, maxI = seedI, minJ = seedJ, maxJ = seedJ;
+  int cutCount = 0;
+  Vec3 cutPointSum = Vec3::Zero();
+  float cutISum = 0.0f;
+  float cutJSum = 0.0f;
+  bool touches = false;
+
+  // The queue holds packed cell coordinates (j << 16 | i): no division per cell.
+  std::int32_t* queue = queue_.data();
   int head = 0;
   int tail = 0;
   int cutTop = static_cast<int>(queue_.size());
-  visited_[static_cast<std::size_t>(seed)] = stamp;
-  queue[tail++] = seed;
+  visited[seed] = stamp;
+  queue[tail++] = (seedJ << 16) | seedI;
   while (head < tail) {
-    const int c = queue[head++];
-    const int i = c % w;
-    const int j = c / w;
+    const std::int32_t packed = queue[head++];
+    const int i = packed & 0xffff;
+    const int j = packed >> 16;
+    const int c = j * w + i;
     const float z = depth[c];
-    const Vec3 p = pointAt(i, j, z);
-    r.pointSum += p;
-    r.pixelSum += Vec2(static_cast<float>(grid_.originU + i * grid_.step),
-                       static_cast<float>(grid_.originV + j * grid_.step));
-    r.areaM2 += z * z * areaPerZ2;
-    r.minI = std::min(r.minI, i);
-    r.maxI = std::max(r.maxI, i);
-    r.minJ = std::min(r.minJ, j);
-    r.maxJ = std::max(r.maxJ, j);
+    pointSum += Vec3(columnX[i] * z, rowY[j] * z, z);
+    iSum += static_cast<float>(i);
+    jSum += static_cast<float>(j);
+    areaZ2 += z * z;
+    minI = std::min(minI, i);
+    maxI = std::max(maxI, i);
+    minJ = std::min(minJ, j);
+    maxJ = std::max(maxJ, j);
     const float limitX = maxDepthStep(rule, z, spacingX);
     const float limitY = maxDepthStep(rule, z, spacingY);
     const auto visit = [&](int n, int ni, int nj, float limit) {
-      const auto ns = static_cast<std::size_t>(n);
-      if (visited_[ns] == stamp) return;
+      if (visited[n] == stamp) return;
       const float zn = depth[n];
       if (zn == 0.0f || std::fabs(zn - z) > limit) return;
-      const std::uint8_t label = labels_[ns];
+      const std::uint8_t label = labels[n];
       if (label != kFree) {
         // Connected to an accepted region or its cut: this is not a separate volume.
-        if (label != kTried) r.touchesEarlierRegion = true;
+        touches |= label != kTried;
         return;
       }
-      visited_[ns] = stamp;
-      const Vec3 q = pointAt(ni, nj, zn);
-      if ((q - r.nearestPoint).squaredNorm() <= radius2) {
-        queue[tail++] = n;
+      visited[n] = stamp;
+      const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
+      if ((q - nearest).squaredNorm() <= radius2) {
+        queue[tail++] = (nj << 16) | ni;
       } else {
-        queue[--cutTop] = n;
-        ++r.cutCount;
-        r.cutPointSum += q;
-        r.cutPixelSum += Vec2(static_cast<float>(grid_.originU + ni * grid_.step),
-                              static_cast<float>(grid_.originV + nj * grid_.step));
+        queue[--cutTop] = (nj << 16) | ni;
+        ++cutCount;
+        cutPointSum += q;
+        cutISum += static_cast<float>(ni);
+        cutJSum += static_cast<float>(nj);
       }
     };
     if (i > 0) visit(c - 1, i - 1, j, limitX);
@@ -132,7 +152,26 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
     if (j > 0) visit(c - w, i, j - 1, limitY);
     if (j + 1 < h) visit(c + w, i, j + 1, limitY);
   }
+
+  // Cell sums to pixel sums: u = originU + i * step.
+  const auto ou = static_cast<float>(grid_.originU);
+  const auto ov = static_cast<float>(grid_.originV);
+  GrownRegion r;
   r.cellCount = tail;
+  r.areaM2 = areaZ2 * areaPerZ2;
+  r.touchesEarlierRegion = touches;
+  r.nearestPoint = nearest;
+  r.pointSum = pointSum;
+  r.pixelSum = Vec2(ou * static_cast<float>(tail) + step * iSum,
+                    ov * static_cast<float>(tail) + step * jSum);
+  r.cutCount = cutCount;
+  r.cutPointSum = cutPointSum;
+  r.cutPixelSum = Vec2(ou * static_cast<float>(cutCount) + step * cutISum,
+                       ov * static_cast<float>(cutCount) + step * cutJSum);
+  r.minI = minI;
+  r.maxI = maxI;
+  r.minJ = minJ;
+  r.maxJ = maxJ;
   regionEnd_ = tail;
   cutBegin_ = cutTop;
   return r;
@@ -141,14 +180,16 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
 void RegionGrower::accept(CellLabel region) {
   assert(region == kRegion1 || region == kRegion2);
   const auto cut = static_cast<std::uint8_t>(region == kRegion1 ? kCut1 : kCut2);
-  for (int q = 0; q < regionEnd_; ++q) labels_[static_cast<std::size_t>(queue_[q])] = region;
+  for (int q = 0; q < regionEnd_; ++q)
+    labels_[cellOf(queue_[static_cast<std::size_t>(q)])] = region;
   for (std::size_t q = static_cast<std::size_t>(cutBegin_); q < queue_.size(); ++q) {
-    labels_[static_cast<std::size_t>(queue_[q])] = cut;
+    labels_[cellOf(queue_[q])] = cut;
   }
 }
 
 void RegionGrower::reject() {
-  for (int q = 0; q < regionEnd_; ++q) labels_[static_cast<std::size_t>(queue_[q])] = kTried;
+  for (int q = 0; q < regionEnd_; ++q)
+    labels_[cellOf(queue_[static_cast<std::size_t>(q)])] = kTried;
 }
 
 void RegionGrower::retireAccepted() {

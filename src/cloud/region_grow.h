@@ -55,7 +55,7 @@ struct GrownRegion {
 // Grows regions nearest-first over one grid. Buffers are sized once for the largest grid.
 class RegionGrower {
  public:
-  void reserve(std::size_t cells);
+  void reserve(std::size_t cells, int maxWidth, int maxHeight);
   // Starts a new grid (seen through intrinsics k): all cells kFree.
   void reset(const DepthGrid& grid, const Intrinsics& k);
 
@@ -103,10 +103,17 @@ class RegionGrower {
   Intrinsics k_;
   std::vector<std::uint8_t> labels_;   // (cells) CellLabel
   std::vector<std::uint8_t> visited_;  // (cells) attempt that reached the cell, 0 = none
-  std::vector<std::int32_t> queue_;    // region cells from the front, cut cells from the back
-  std::uint8_t attempt_ = 0;           // grows per grow() call, reset with the grid
-  int regionEnd_ = 0;                  // queue_[0, regionEnd_) = region of the last grow
-  int cutBegin_ = 0;                   // queue_[cutBegin_, cells) = its cut cells
+  // Packed cells (j << 16 | i): the region from the front, its cut cells from the back.
+  std::vector<std::int32_t> queue_;
+  std::vector<float> columnX_;  // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;     // (height) (v - cy) / fy of each row
+  std::size_t cellOf(std::int32_t packed) const {
+    return static_cast<std::size_t>(packed >> 16) * static_cast<std::size_t>(grid_.width) +
+           static_cast<std::size_t>(packed & 0xffff);
+  }
+  std::uint8_t attempt_ = 0;  // grows per grow() call, reset with the grid
+  int regionEnd_ = 0;         // queue_[0, regionEnd_) = region of the last grow
+  int cutBegin_ = 0;          // queue_[cutBegin_, cells) = its cut cells
 };
 
 }  // namespace dynahand::cloud

@@ -115,6 +115,17 @@ struct World::Impl {
     Vec3 armA, armB;  // anchor relative to the slot's centre of mass, slot axes, m
   };
   std::vector<JointPosition> jointPositions;
+  // Ball-joint anchors solved as one 3x3 block per joint: Cdot = vB + wB x rB - vA - wA x rA,
+  // impulse increment = -K^-1 (Cdot + bias), K = (mA^-1 + mB^-1) 1 - [rA] IA^-1 [rA] - [rB] IB^-1 [rB].
+  struct PointBlock {
+    int slotA, slotB;
+    Vec3 rA, rB;     // arms from the slots' centres of mass, world, m
+    Mat3 invK;       // kg
+    Vec3 bias;       // m/s
+    Vec3 impulse;    // accumulated, N s
+    float* store;    // 3 floats of WorldState::jointImpulse
+  };
+  std::vector<PointBlock> pointBlocks;
   std::vector<ContactPoint> contactView;
   std::vector<WorldState::CachedContact> newContacts;
   // Prepared surface rows (parallel to SurfaceRows).

@@ -4,14 +4,15 @@
 //
 //   1. coarse search: every `coarseStep`-th pixel, range-gated; region growing from the
 //      nearest samples finds "the closest, sufficiently large volume" and its image box;
-//   2. filtering inside that box only: range gate, 3x3 median, optional bilateral,
-//      flying-pixel removal at depth edges;
-//   3. segmentation at full resolution: the region grown from the nearest filtered pixel
-//      of the coarse region, across neighbours whose depth step is small, within a
-//      hand-sized radius of that nearest point; the arm is where it was cut;
-//   4. voxel-grid subsampling of the segmented pixels (VoxelGrid);
-//   5. boundary planes around the segmented pixels (BoundaryPlaneBuilder), leaving out
+//   2. filtering inside that box only, at the working stride (sampleStride): range gate,
+//      3x3 median, optional bilateral, flying-pixel removal at depth edges;
+//   3. segmentation: the region grown from the nearest filtered sample across neighbours
+//      whose depth step is small, within a hand-sized radius of that nearest point; the
+//      arm is where it was cut;
+//   4. voxel-grid subsampling of the segmented samples (VoxelGrid);
+//   5. boundary planes around the segmented samples (BoundaryPlaneBuilder), leaving out
 //      the side where the arm leaves.
+// docs/cloud.md explains each stage and parameter.
 //
 // Units: metres, camera frame x right, y down, z forward. Nothing is allocated per frame
 // once a CloudFrame has seen one frame of the pipeline's size.
@@ -32,12 +33,12 @@ struct DepthFilterConfig {
   float minDepthM = 0.15f;  // range gate: nearer samples are dropped (m)
   float maxDepthM = 2.0f;   // range gate: farther samples are dropped (m)
   bool median = true;       // 3x3 median (OpenCV), removes speckle and fills 1-pixel holes
-  // Bilateral smoothing (OpenCV, float, 5x5 window). Off by default: it costs about
-  // 1 ms per 100k filtered pixels here, and the voxel centroids already average
-  // ~10-30 pixels each. Its sigmas below.
+  // Bilateral smoothing (OpenCV, float, 5x5 window). Off by default: it adds 0.15-0.2 ms
+  // per frame here (docs/performance.md), and the voxel centroids already average several
+  // samples each. Its sigmas below.
   bool bilateral = false;
   float bilateralSigmaDepthM = 0.01f;  // range sigma (m)
-  float bilateralSigmaPixels = 2.0f;   // spatial sigma (pixels)
+  float bilateralSigmaPixels = 2.0f;   // spatial sigma (samples)
   bool removeFlyingPixels = true;      // drop pixels cut off from both sides (see below)
 };
 
@@ -104,7 +105,7 @@ struct Segment {
   // centroid toward the cut; zero when nothing was cut.
   Vec3 armDirection = Vec3::Zero();
   Vec2 armDirectionImage = Vec2::Zero();  // the same in the image (pixels, unit)
-  int cutPixelCount = 0;                  // connected pixels beyond the radius
+  int cutPixelCount = 0;                  // connected samples just beyond the radius
   int regionCount = 0;                    // 1, or 2 with secondRegionDepthBandM
 };
 

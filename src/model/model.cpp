@@ -97,7 +97,8 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
       if (!finite(b.vertices[v])) return pathError(fmt::format("{}.vertices[{}]", path, v), "not finite");
     }
     Result<physics::ConvexShape> shape = physics::ConvexShape::fromPoints(b.vertices);
-    if (!shape) return pathError(path + ".vertices", shape.message());
+    // Non-finite points were caught above: what remains is a flat or too small point set.
+    if (!shape) return pathError(path + ".vertices", "fewer than 4 non-coplanar points (" + shape.message() + ")");
     if (b.mass && b.density) return pathError(path, "give mass or density, not both");
     float mass = 0.0f;
     if (b.mass) {

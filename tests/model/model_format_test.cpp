@@ -166,7 +166,7 @@ TEST(ModelFormatErrors, FewerThanFourVertices) {
   json doc = armJson();
   doc["bodies"][3]["vertices"] = json::array({json::array({0, 0, 0}), json::array({1, 0, 0}), json::array({0, 1, 0})});
   const std::string error = loadError(doc);
-  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: ", 0), 0u) << error;
+  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: fewer than 4 non-coplanar points (", 0), 0u) << error;
 }
 
 TEST(ModelFormatErrors, CoplanarVertices) {
@@ -174,7 +174,7 @@ TEST(ModelFormatErrors, CoplanarVertices) {
   doc["bodies"][5 - 2]["vertices"] = json::array(
       {json::array({0, 0, 0}), json::array({0.1, 0, 0}), json::array({0, 0.1, 0}), json::array({0.1, 0.1, 0})});
   const std::string error = loadError(doc);
-  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: ", 0), 0u) << error;
+  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: fewer than 4 non-coplanar points (", 0), 0u) << error;
 }
 
 TEST(ModelFormatErrors, NonConvexPointSetIsHulled) {

@@ -329,6 +329,7 @@ void World::reserveRows(int maxRows) {
 }
 
 void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, float margin) {
+  assert(std::abs(normal.squaredNorm() - 1.0f) < 1e-3f && std::isfinite(offset) && cap >= 0.0f);
   const auto i = static_cast<std::size_t>(b);
   const BodyConfig& c = impl_->bodies[i];
   const float centreDist = normal.dot(state_.position[i]) - offset;
@@ -411,7 +412,8 @@ void SurfaceRows::reserve(int rows) {
 
 void SurfaceRows::addSurface(BodyId b, const Vec3& anchorLocal, const Vec3& normalWorld,
                              const Vec3& targetWorld, float cap) {
-  assert(cap >= 0.0f);
+  assert(cap >= 0.0f && anchorLocal.allFinite() && targetWorld.allFinite());
+  assert(std::abs(normalWorld.squaredNorm() - 1.0f) < 1e-3f && "surface row: normal must be unit");
   body.push_back(b);
   anchor.push_back(anchorLocal);
   normal.push_back(normalWorld);
@@ -423,7 +425,8 @@ void SurfaceRows::addSurface(BodyId b, const Vec3& anchorLocal, const Vec3& norm
 
 void SurfaceRows::addLineOfSight(BodyId b, const Vec3& anchorLocal, const Vec3& rayDir,
                                  const Vec3& targetWorld, float cap) {
-  assert(cap >= 0.0f);
+  assert(cap >= 0.0f && anchorLocal.allFinite() && targetWorld.allFinite());
+  assert(std::abs(normalWorld.squaredNorm() - 1.0f) < 1e-3f && "surface row: normal must be unit");
   body.push_back(b);
   anchor.push_back(anchorLocal);
   normal.push_back(rayDir);

@@ -26,6 +26,13 @@ namespace dynahand::synth {
 // IP, tip), 5-8 index (MCP, PIP, DIP, tip), 9-12 middle, 13-16 ring, 17-20 pinky.
 using HandKeypoints = std::array<Vec3, 21>;
 
+// All 21 keypoints at the origin (Eigen vectors are not zeroed by default construction).
+inline HandKeypoints zeroKeypoints() {
+  HandKeypoints k;
+  k.fill(Vec3::Zero());
+  return k;
+}
+
 // The convex hull of a sphere at `a` (radius ra) and a sphere at `b` (radius rb): a
 // sphere when a == b, a capsule when ra == rb. Metres, camera frame.
 struct RoundCone {
@@ -58,10 +65,10 @@ struct SurfaceRadii {
 
 // One hand's skeleton as the renderer needs it.
 struct HandSkeleton {
-  HandKeypoints keypoints{};    // m, camera frame
-  Vec3 elbow = Vec3::Zero();    // m, camera frame: far end of the forearm
-  bool leftHand = false;        // mirrors the palm normal used for the fingertip pads
-  float scale = 1.0f;           // radii multiplier (hand size / reference size)
+  HandKeypoints keypoints = zeroKeypoints();  // m, camera frame
+  Vec3 elbow = Vec3::Zero();                  // m, camera frame: far end of the forearm
+  bool leftHand = false;                      // mirrors the palm normal used for the fingertip pads
+  float scale = 1.0f;                         // radii multiplier (hand size / reference size)
 };
 
 // Maximum primitives one hand produces (fingers, palm, pads, forearm).
@@ -108,10 +115,10 @@ class DepthRenderer {
                std::vector<PixelLabel>& labels);
 
   Intrinsics intrinsics_;
-  std::vector<float> rayX_;  // (width) (u - cx) / fx
-  std::vector<float> rayY_;  // (height) (v - cy) / fy
-  std::vector<float> depth_, backgroundDepth_;              // (height x width), m
-  std::vector<PixelLabel> labels_, backgroundLabels_;      // (height x width)
+  std::vector<float> rayX_;                            // (width) (u - cx) / fx
+  std::vector<float> rayY_;                            // (height) (v - cy) / fy
+  std::vector<float> depth_, backgroundDepth_;         // (height x width), m
+  std::vector<PixelLabel> labels_, backgroundLabels_;  // (height x width)
   std::int64_t testedPixels_ = 0;
 };
 

@@ -20,13 +20,13 @@ enum class SensorKind { Ideal, TimeOfFlight, StructuredLight, ActiveStereo };
 
 // All parameters of a profile. Fields a kind does not use are zero.
 struct SensorProfile {
-  std::string name;            // "ideal", "tof", "structured-light", "active-stereo"
-  std::string device;          // the real device this profile imitates
+  std::string name;    // "ideal", "tof", "structured-light", "active-stereo"
+  std::string device;  // the real device this profile imitates
   SensorKind kind = SensorKind::Ideal;
-  Intrinsics intrinsics;       // image size and pinhole parameters, pixels
-  float depthScale = 0.001f;   // m per stored uint16 unit
-  float minRange = 0.0f;       // m: true depth below this reads 0 (no data)
-  float maxRange = 0.0f;       // m: true depth above this reads 0
+  Intrinsics intrinsics;      // image size and pinhole parameters, pixels
+  float depthScale = 0.001f;  // m per stored uint16 unit
+  float minRange = 0.0f;      // m: true depth below this reads 0 (no data)
+  float maxRange = 0.0f;      // m: true depth above this reads 0
   // Random depth noise, Gaussian, std sigma(z) = noiseAtHalfMetre * (z / 0.5 m)^2 (ToF:
   // amplitude falls as 1/z^2; triangulation: dz = z^2 dd / (f b)). Triangulating kinds
   // apply it as the equivalent disparity noise.

@@ -27,12 +27,12 @@ constexpr float kNearPlane = 0.05f;
 struct ConeTerms {
   Vec3 a, b, w;
   float raSq, rbSq, aa, bb;
-  bool hasSide;     // false: one sphere contains the other (only spheres are tested)
-  float invKSq;     // 1 / k^2
-  float f, h, m;    // see the top comment
-  float gammaSide;  // A - f^2 - h^2
-  float sMin, sMax; // axial range of the cone's side, m
-  Vec3 centre;      // bounding sphere of the whole primitive
+  bool hasSide;      // false: one sphere contains the other (only spheres are tested)
+  float invKSq;      // 1 / k^2
+  float f, h, m;     // see the top comment
+  float gammaSide;   // A - f^2 - h^2
+  float sMin, sMax;  // axial range of the cone's side, m
+  Vec3 centre;       // bounding sphere of the whole primitive
   float boundSq;
   float centreSq;
 };
@@ -156,14 +156,16 @@ DepthRenderer::DepthRenderer(const Intrinsics& intrinsics) : intrinsics_(intrins
   backgroundLabels_.assign(n, PixelLabel::Empty);
 }
 
-void DepthRenderer::setBackground(std::span<const Plane> planes, std::span<const RoundCone> solids) {
+void DepthRenderer::setBackground(std::span<const Plane> planes,
+                                  std::span<const RoundCone> solids) {
   std::fill(backgroundDepth_.begin(), backgroundDepth_.end(), 0.0f);
   std::fill(backgroundLabels_.begin(), backgroundLabels_.end(), PixelLabel::Empty);
   const int w = intrinsics_.width;
   for (const Plane& plane : planes) {
     for (int v = 0; v < intrinsics_.height; ++v) {
       for (int u = 0; u < w; ++u) {
-        const Vec3 dir(rayX_[static_cast<std::size_t>(u)], rayY_[static_cast<std::size_t>(v)], 1.0f);
+        const Vec3 dir(rayX_[static_cast<std::size_t>(u)], rayY_[static_cast<std::size_t>(v)],
+                       1.0f);
         const float denom = plane.normal.dot(dir);
         if (std::fabs(denom) < 1e-9f) continue;
         const float t = plane.offset / denom;  // depth, since dir.z == 1
@@ -176,7 +178,8 @@ void DepthRenderer::setBackground(std::span<const Plane> planes, std::span<const
       }
     }
   }
-  for (const RoundCone& solid : solids) drawOne(solid, PixelLabel::Background, backgroundDepth_, backgroundLabels_);
+  for (const RoundCone& solid : solids)
+    drawOne(solid, PixelLabel::Background, backgroundDepth_, backgroundLabels_);
   clear();
 }
 

@@ -17,7 +17,8 @@ Vec3 safeNormalized(const Vec3& v, const Vec3& fallback) {
 
 }  // namespace
 
-void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii, std::vector<RoundCone>& out) {
+void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii,
+                      std::vector<RoundCone>& out) {
   const HandKeypoints& kp = hand.keypoints;
   const float s = hand.scale;
   const std::size_t firstPrimitive = out.size();
@@ -48,7 +49,8 @@ void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii, std::
     const Vec3 boneDir = safeNormalized(tip - dip, distal);
     const Vec3 padDir = safeNormalized(palmar - palmar.dot(boneDir) * boneDir, palmar);
     const float padRadius = r[3] * s;
-    out.push_back({0.5f * (dip + tip) + padDir * (radii.padOffset * s), Vec3::Zero(), padRadius, padRadius});
+    out.push_back(
+        {0.5f * (dip + tip) + padDir * (radii.padOffset * s), Vec3::Zero(), padRadius, padRadius});
     out.back().b = out.back().a;
   }
 
@@ -60,9 +62,11 @@ void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii, std::
     const Vec3 toMcp = kp[static_cast<std::size_t>(kFingerBase[f])] - wrist;
     basePoint[f - 1] = wrist + 0.7f * toMcp.dot(lateral) * lateral + 0.12f * toMcp;
   }
-  for (int f = 1; f < 5; ++f) out.push_back({basePoint[f - 1], kp[static_cast<std::size_t>(kFingerBase[f])], palmR, palmR});
+  for (int f = 1; f < 5; ++f)
+    out.push_back({basePoint[f - 1], kp[static_cast<std::size_t>(kFingerBase[f])], palmR, palmR});
   for (int f = 1; f < 4; ++f) {
-    const Vec3 mcpMid = 0.5f * (kp[static_cast<std::size_t>(kFingerBase[f])] + kp[static_cast<std::size_t>(kFingerBase[f + 1])]);
+    const Vec3 mcpMid = 0.5f * (kp[static_cast<std::size_t>(kFingerBase[f])] +
+                                kp[static_cast<std::size_t>(kFingerBase[f + 1])]);
     out.push_back({0.5f * (basePoint[f - 1] + basePoint[f]), mcpMid, palmR, palmR});
   }
   out.push_back({basePoint[0], basePoint[3], palmR, palmR});

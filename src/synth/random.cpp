@@ -31,7 +31,8 @@ std::array<float, kBins> makeTable() {
   const double scale = 1.0 / std::sqrt(sumSq / kBins);
   std::array<float, kBins> table{};
   for (int i = 0; i < kBins; ++i)
-    table[static_cast<std::size_t>(i)] = static_cast<float>(values[static_cast<std::size_t>(i)] * scale);
+    table[static_cast<std::size_t>(i)] =
+        static_cast<float>(values[static_cast<std::size_t>(i)] * scale);
   return table;
 }
 

@@ -27,10 +27,17 @@ inline std::uint64_t bits(std::uint64_t key, std::uint64_t index, std::uint64_t 
 }
 
 // Uniform in [0, 1).
-inline float uniform(std::uint64_t r) { return static_cast<float>(r >> 40) * (1.0f / 16777216.0f); }
+inline float uniform(std::uint64_t r) {
+  return static_cast<float>(r >> 40) * (1.0f / 16777216.0f);
+}
 
-// Standard normal by inverse-CDF table lookup (4096 equal-probability bins, linearly
-// interpolated; unit variance by construction, tails cut at about 3.6 sigma).
+// Uniform in [0, 1) from the low 24 bits (independent of uniform() and normal()).
+inline float uniformLow(std::uint64_t r) {
+  return static_cast<float>(r & 0xFFFFFFu) * (1.0f / 16777216.0f);
+}
+
+// Standard normal by inverse-CDF table lookup (4096 equal-probability bins; the value
+// uses the top 12 bits; unit variance by construction, tails cut at about 3.5 sigma).
 float normal(std::uint64_t r);
 
 }  // namespace dynahand::synth::detail

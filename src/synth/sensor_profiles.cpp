@@ -36,7 +36,8 @@ std::vector<SensorProfile> makeProfiles() {
   // depth, ~72 deg horizontal field of view, 0.15-1 m working range.
   SensorProfile tof;
   tof.name = "tof";
-  tof.device = "Creative Interactive Gesture Camera (SoftKinetic DS325), close-range time of flight";
+  tof.device =
+      "Creative Interactive Gesture Camera (SoftKinetic DS325), close-range time of flight";
   tof.kind = SensorKind::TimeOfFlight;
   tof.intrinsics = centred(320, 240, 224.0f);
   tof.depthScale = 0.001f;

@@ -15,10 +15,19 @@ namespace {
 using detail::bits;
 using detail::normal;
 using detail::uniform;
+using detail::uniformLow;
 
 // Random streams, one per decision, so effects do not share random numbers.
 enum Stream : std::uint64_t {
-  kNoise = 1, kDropout, kFlyDecide, kFlyMix, kThin, kSpeckleDecide, kSpeckleSize, kHoleX, kHoleY
+  kNoise = 1,
+  kDropout,
+  kFlyDecide,
+  kFlyMix,
+  kThin,
+  kSpeckleDecide,
+  kSpeckleSize,
+  kHoleX,
+  kHoleY
 };
 
 constexpr float kFar = 1e4f;  // stands for "no surface" inside the morphology filters, m
@@ -44,7 +53,8 @@ void windowFilter(const std::vector<float>& src, std::vector<float>& dst, int w,
 
 SensorSimulator::SensorSimulator(SensorProfile profile, std::uint64_t seed)
     : profile_(std::move(profile)), seed_(seed) {
-  const std::size_t n = static_cast<std::size_t>(profile_.intrinsics.width) * profile_.intrinsics.height;
+  const std::size_t n =
+      static_cast<std::size_t>(profile_.intrinsics.width) * profile_.intrinsics.height;
   work_.assign(n, 0.0f);
   scratch_.assign(n, 0.0f);
   scratch2_.assign(n, 0.0f);
@@ -57,7 +67,8 @@ void SensorSimulator::apply(std::span<const float> trueDepth, std::span<const Pi
   const std::size_t n = static_cast<std::size_t>(w) * h;
   assert(trueDepth.size() == n && labels.size() == n);
   (void)labels;
-  if (out.width != w || out.height != h || out.depth.size() != n) out = DepthFrame(w, h, p.depthScale);
+  if (out.width != w || out.height != h || out.depth.size() != n)
+    out = DepthFrame(w, h, p.depthScale);
   out.depthScale = p.depthScale;
   out.timestamp = timestamp;
   const std::uint64_t key = detail::frameKey(seed_, frameIndex);
@@ -68,8 +79,11 @@ void SensorSimulator::apply(std::span<const float> trueDepth, std::span<const Pi
   }
 
   switch (p.kind) {
-    case SensorKind::Ideal: break;
-    case SensorKind::TimeOfFlight: flyingPixels(trueDepth, key); break;
+    case SensorKind::Ideal:
+      break;
+    case SensorKind::TimeOfFlight:
+      flyingPixels(trueDepth, key);
+      break;
     case SensorKind::StructuredLight:
       if (p.projectorShadows) shadows();
       if (p.thinRadiusPx > 0) thinFeatures(key);
@@ -83,32 +97,38 @@ void SensorSimulator::apply(std::span<const float> trueDepth, std::span<const Pi
   const float focalBaseline = p.intrinsics.fx * p.baseline;  // px m
   // Disparity noise equivalent to sigma(z) = noiseAtHalfMetre (z / 0.5)^2.
   const float disparitySigma = triangulating ? p.noiseAtHalfMetre * focalBaseline / 0.25f : 0.0f;
+  const float inverseStep = triangulating ? 1.0f / p.disparityStep : 0.0f;
+  const float noiseScale = p.noiseAtHalfMetre * 4.0f;  // sigma(z) = noiseScale z^2
+  const bool random =
+      p.noiseAtHalfMetre > 0.0f || p.dropoutFraction > 0.0f || p.speckleFraction > 0.0f;
   for (std::size_t i = 0; i < n; ++i) {
     float z = work_[i];
-    if (z <= 0.0f) continue;
+    if (z <= 0.0f || !random) continue;
+    // One 64-bit draw per pixel: the top 12 bits pick the normal sample, the low 24 bits
+    // decide dropout (independent bits of the same mixed value).
+    const std::uint64_t r = bits(key, i, kNoise);
     if (p.kind == SensorKind::TimeOfFlight) {
-      const float ratio = z / 0.5f;
-      z += p.noiseAtHalfMetre * ratio * ratio * normal(bits(key, i, kNoise));
+      z += noiseScale * z * z * normal(r);
     } else if (triangulating) {
-      float d = focalBaseline / z + disparitySigma * normal(bits(key, i, kNoise));
-      d = std::round(d / p.disparityStep) * p.disparityStep;
+      float d = focalBaseline / z + disparitySigma * normal(r);
+      d = std::round(d * inverseStep) * p.disparityStep;
       z = d > 0.0f ? focalBaseline / d : 0.0f;
       if (p.leftInvalidBand && static_cast<float>(i % static_cast<std::size_t>(w)) < d) z = 0.0f;
     }
     if (p.speckleFraction > 0.0f && uniform(bits(key, i, kSpeckleDecide)) < p.speckleFraction) {
-      const std::uint64_t r = bits(key, i, kSpeckleSize);
-      const float size = 0.02f + 0.06f * uniform(r);
-      z += (r & 1u) ? size : -size;
+      const std::uint64_t rs = bits(key, i, kSpeckleSize);
+      const float size = 0.02f + 0.06f * uniform(rs);
+      z += (rs & 1u) ? size : -size;
     }
-    if (p.dropoutFraction > 0.0f && uniform(bits(key, i, kDropout)) < p.dropoutFraction) z = 0.0f;
+    if (uniformLow(r) < p.dropoutFraction) z = 0.0f;
     work_[i] = z;
   }
   if (p.holeFraction > 0.0f) holes(key);
 
-  const float maxStored = 65535.0f * p.depthScale;
+  const float inverseScale = 1.0f / p.depthScale;
   for (std::size_t i = 0; i < n; ++i) {
-    const float z = work_[i];
-    out.depth[i] = (z > 0.0f && z < maxStored) ? static_cast<std::uint16_t>(std::lround(z / p.depthScale)) : 0;
+    const float units = work_[i] * inverseScale + 0.5f;
+    out.depth[i] = (units >= 1.0f && units < 65536.0f) ? static_cast<std::uint16_t>(units) : 0;
   }
 }
 
@@ -135,7 +155,8 @@ void SensorSimulator::flyingPixels(std::span<const float> depth, std::uint64_t k
           target = other;
         }
       }
-      if (jump <= p.edgeJump || uniform(bits(key, i, kFlyDecide)) >= p.flyingPixelProbability) continue;
+      if (jump <= p.edgeJump || uniform(bits(key, i, kFlyDecide)) >= p.flyingPixelProbability)
+        continue;
       const float z2 = z + uniform(bits(key, i, kFlyMix)) * (target - z);
       work_[i] = (z2 >= p.minRange && z2 <= p.maxRange) ? z2 : 0.0f;
     }
@@ -212,8 +233,10 @@ void SensorSimulator::holes(std::uint64_t key) {
   const int w = p.intrinsics.width, h = p.intrinsics.height;
   const float r = p.holeRadiusPx;
   const float areaW = static_cast<float>(w) + 2.0f * r, areaH = static_cast<float>(h) + 2.0f * r;
-  const double perDisc = M_PI * static_cast<double>(r * r) / (static_cast<double>(areaW) * static_cast<double>(areaH));
-  const int count = static_cast<int>(std::lround(std::log(1.0 - static_cast<double>(p.holeFraction)) / std::log(1.0 - perDisc)));
+  const double perDisc =
+      M_PI * static_cast<double>(r * r) / (static_cast<double>(areaW) * static_cast<double>(areaH));
+  const int count = static_cast<int>(
+      std::lround(std::log(1.0 - static_cast<double>(p.holeFraction)) / std::log(1.0 - perDisc)));
   for (int k = 0; k < count; ++k) {
     const float cu = -0.5f - r + areaW * uniform(bits(key, static_cast<std::uint64_t>(k), kHoleX));
     const float cv = -0.5f - r + areaH * uniform(bits(key, static_cast<std::uint64_t>(k), kHoleY));

@@ -30,7 +30,10 @@ double hullMeasure(const RoundCone& c, const Eigen::Vector3d& p) {
   double lo = 0.0, hi = 1.0;
   for (int i = 0; i < 100; ++i) {
     const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
-    if (f(m1) < f(m2)) hi = m2; else lo = m1;
+    if (f(m1) < f(m2))
+      hi = m2;
+    else
+      lo = m1;
   }
   return f(0.5 * (lo + hi));
 }
@@ -105,7 +108,8 @@ TEST(DepthRenderer, BoundingBoxCullingMatchesBruteForce) {
   int hits = 0;
   for (int v = 0; v < k.height; ++v) {
     for (int u = 0; u < k.width; ++u) {
-      const Vec3 dir((static_cast<float>(u) - k.cx) / k.fx, (static_cast<float>(v) - k.cy) / k.fy, 1.0f);
+      const Vec3 dir((static_cast<float>(u) - k.cx) / k.fx, (static_cast<float>(v) - k.cy) / k.fy,
+                     1.0f);
       float best = 0.0f;
       for (const RoundCone& c : cones) {
         const float t = intersectRoundCone(c, dir);

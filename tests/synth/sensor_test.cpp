@@ -28,13 +28,14 @@ Plane tiltedWall(float centreDepth) {
 }
 
 struct WallStats {
-  double noiseStd = 0.0;          // of reported minus true depth, outliers excluded, m
-  double expectedStd = 0.0;       // RMS of the profile's expectedNoiseStd over those pixels, m
-  double dropout = 0.0;           // fraction of pixels reading 0 (left band excluded)
-  double outlierFraction = 0.0;   // fraction of valid pixels beyond 6 expected std
+  double noiseStd = 0.0;         // of reported minus true depth, outliers excluded, m
+  double expectedStd = 0.0;      // RMS of the profile's expectedNoiseStd over those pixels, m
+  double dropout = 0.0;          // fraction of pixels reading 0 (left band excluded)
+  double outlierFraction = 0.0;  // fraction of valid pixels beyond 6 expected std
 };
 
-WallStats measureWall(const SensorProfile& profile, float centreDepth, int frames, std::uint64_t seed = 7) {
+WallStats measureWall(const SensorProfile& profile, float centreDepth, int frames,
+                      std::uint64_t seed = 7) {
   DepthRenderer renderer(profile.intrinsics);
   const Plane wall = tiltedWall(centreDepth);
   renderer.setBackground(std::span(&wall, 1), {});
@@ -49,14 +50,16 @@ WallStats measureWall(const SensorProfile& profile, float centreDepth, int frame
       const float truth = renderer.depth()[i];
       const int u = static_cast<int>(i % static_cast<std::size_t>(w));
       // The stereo left band (u < disparity) is a separate, deterministic effect.
-      if (profile.leftInvalidBand && u < profile.intrinsics.fx * profile.baseline / truth + 2.0f) continue;
+      if (profile.leftInvalidBand && u < profile.intrinsics.fx * profile.baseline / truth + 2.0f)
+        continue;
       ++considered;
       if (frame.depth[i] == 0) {
         ++zeros;
         continue;
       }
       ++valid;
-      const double residual = frame.depth[i] * static_cast<double>(profile.depthScale) - static_cast<double>(truth);
+      const double residual =
+          frame.depth[i] * static_cast<double>(profile.depthScale) - static_cast<double>(truth);
       const double sigma = static_cast<double>(profile.expectedNoiseStd(truth));
       if (std::fabs(residual) > 6.0 * sigma) {
         ++outliers;
@@ -76,7 +79,9 @@ WallStats measureWall(const SensorProfile& profile, float centreDepth, int frame
 }
 
 // The wall at 0.5 m; structured light's minimum range is 0.5 m, so its wall sits just beyond.
-float noiseWallDepth(const SensorProfile& p) { return std::max(0.5f, p.minRange + 0.012f); }
+float noiseWallDepth(const SensorProfile& p) {
+  return std::max(0.5f, p.minRange + 0.012f);
+}
 
 TEST(SensorProfiles, EveryProfileHasADeviceAndValidCamera) {
   ASSERT_EQ(sensorProfiles().size(), 4u);
@@ -111,8 +116,8 @@ class ProfileStatistics : public ::testing::TestWithParam<const char*> {};
 TEST_P(ProfileStatistics, NoiseStdAtHalfMetreWithinTenPercent) {
   const SensorProfile& p = profileNamed(GetParam());
   const WallStats s = measureWall(p, noiseWallDepth(p), 2);
-  EXPECT_NEAR(s.noiseStd / s.expectedStd, 1.0, 0.10) << p.name << ": measured " << s.noiseStd << " m, documented "
-                                                     << s.expectedStd << " m";
+  EXPECT_NEAR(s.noiseStd / s.expectedStd, 1.0, 0.10)
+      << p.name << ": measured " << s.noiseStd << " m, documented " << s.expectedStd << " m";
 }
 
 TEST_P(ProfileStatistics, DropoutFractionWithinTenPercent) {
@@ -122,7 +127,8 @@ TEST_P(ProfileStatistics, DropoutFractionWithinTenPercent) {
   if (expected == 0.0)
     EXPECT_EQ(s.dropout, 0.0) << p.name;
   else
-    EXPECT_NEAR(s.dropout / expected, 1.0, 0.10) << p.name << ": measured " << s.dropout << ", documented " << expected;
+    EXPECT_NEAR(s.dropout / expected, 1.0, 0.10)
+        << p.name << ": measured " << s.dropout << ", documented " << expected;
 }
 
 TEST_P(ProfileStatistics, MinimumRangeWithinTenPercent) {
@@ -148,7 +154,8 @@ TEST(SensorProfiles, ActiveStereoSpeckleFractionWithinTenPercent) {
   const SensorProfile& p = profileNamed("active-stereo");
   const WallStats s = measureWall(p, 0.5f, 8);
   // Speckle offsets are 2-8 cm, all beyond 6 sigma at 0.5 m; Gaussian noise never is.
-  EXPECT_NEAR(s.outlierFraction / static_cast<double>(p.speckleFraction), 1.0, 0.10) << s.outlierFraction;
+  EXPECT_NEAR(s.outlierFraction / static_cast<double>(p.speckleFraction), 1.0, 0.10)
+      << s.outlierFraction;
 }
 
 // A ball in front of a wall, through the given profile; returns {ideal, degraded}.
@@ -170,7 +177,8 @@ TEST(SensorArtefacts, TimeOfFlightHasFlyingPixelsBetweenBallAndWall) {
   DepthFrame frame;
   sensor.apply(scene.renderer.depth(), scene.renderer.labels(), 0, 0.0, frame);
   int flying = 0;
-  for (const std::uint16_t d : frame.depth) flying += d > 700 && d < 850;  // between 0.65 and 0.9 m minus noise
+  for (const std::uint16_t d : frame.depth)
+    flying += d > 700 && d < 850;  // between 0.65 and 0.9 m minus noise
   EXPECT_GT(flying, 20);
   SensorSimulator ideal(profileNamed("ideal"), 3);
   ideal.apply(scene.renderer.depth(), scene.renderer.labels(), 0, 0.0, frame);
@@ -228,7 +236,8 @@ TEST(SensorArtefacts, ActiveStereoFattensForegroundAlongRows) {
   const SensorProfile& p = profileNamed("active-stereo");
   BallScene scene(p);
   SensorProfile clean = p;
-  clean.dropoutFraction = clean.holeFraction = clean.speckleFraction = clean.noiseAtHalfMetre = 0.0f;
+  clean.dropoutFraction = clean.holeFraction = clean.speckleFraction = clean.noiseAtHalfMetre =
+      0.0f;
   SensorSimulator sensor(clean, 1);
   DepthFrame frame;
   sensor.apply(scene.renderer.depth(), scene.renderer.labels(), 0, 0.0, frame);
@@ -245,7 +254,8 @@ TEST(SensorReproducibility, SameSeedSameBytesAnyOrder) {
   BallScene scene(p);
   DepthFrame a, b, c;
   SensorSimulator first(p, 42), second(p, 42), other(p, 43);
-  for (int f = 0; f < 3; ++f) first.apply(scene.renderer.depth(), scene.renderer.labels(), f, 0.0, a);
+  for (int f = 0; f < 3; ++f)
+    first.apply(scene.renderer.depth(), scene.renderer.labels(), f, 0.0, a);
   second.apply(scene.renderer.depth(), scene.renderer.labels(), 2, 0.0, b);  // frame 2 alone
   EXPECT_EQ(a.depth, b.depth);
   other.apply(scene.renderer.depth(), scene.renderer.labels(), 2, 0.0, c);

@@ -1,0 +1,150 @@
+// Synthetic depth sequences of moving hands with exact ground truth: a library of named
+// procedural motion clips on the default hand model (or a pose file), a scene (camera
+// placement, background, table), the smooth render surface (synth_render.h) and a sensor
+// profile (synth_sensor.h). Frames are made on demand, in any order, deterministically
+// from the options (seed included), in memory or written to disk in the canonical
+// sequence layout (sequence.h) plus per-body poses (docs/synth.md, docs/formats/synth.md).
+//
+//   auto seq = synth::SyntheticSequence::create({.clip = "wave", .profile = "tof"});
+//   const synth::SyntheticFrame& f = seq->frame(10);   // f.depth, f.hands[0].keypoints, .pose
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dynahand/core.h"
+#include "dynahand/depth_frame.h"
+#include "dynahand/model.h"
+#include "dynahand/model_pose.h"
+#include "dynahand/sequence.h"
+#include "dynahand/synth_render.h"
+#include "dynahand/synth_sensor.h"
+
+namespace dynahand::synth {
+
+// ---- Motion ----
+
+// Where a clip's hand is at one instant: the model's joint angles (root = forearm body
+// pose in the clip's workspace frame, see docs/synth.md) for a right hand; left hands are
+// the mirror image (model::mirrorAngles).
+struct HandMotionSample {
+  model::Side side = model::Side::Right;
+  model::JointAngles angles;
+};
+
+// A named procedural clip: joint-angle keyframes on the default hand, within its joint
+// limits, smoothly interpolated and looped.
+struct ClipInfo {
+  std::string name;         // e.g. "wave"
+  std::string description;  // one line
+  float duration = 0.0f;    // s, one loop at speed 1
+  int handCount = 1;        // 2 for "two-hands"
+};
+
+// The built-in clips, in a stable order.
+const std::vector<ClipInfo>& clips();
+// The clips README's demo and the default `dynahand synth` use.
+const std::vector<std::string>& defaultClipSet();
+
+// Samples a clip at time t (s; wraps around) for a model made by makeDefaultHand (any size):
+// one sample per hand. Errors for an unknown name (listing the known ones).
+Result<std::vector<HandMotionSample>> sampleClip(const std::string& name,
+                                                 const model::ArticulatedModel& rightHand,
+                                                 float time);
+
+// ---- Scene ----
+
+enum class CameraPlacement {
+  DeskFacing,   // camera in front of the user, sees the palm; forearm enters from the bottom
+  HeadMounted,  // camera at the eyes looking ~35 deg down, sees the back of the hand
+};
+enum class Background { None, Wall, Torso };
+
+struct Scene {
+  CameraPlacement placement = CameraPlacement::DeskFacing;
+  Background background = Background::None;
+  float backgroundDistance = 0.35f;  // m behind the hand (wall plane or torso front)
+  bool table = false;                // a table plane below the hand
+  float tableDrop = 0.20f;           // m from the wrist down to the table (world down)
+  float handDistance = 0.0f;         // m, camera to hand; 0 = auto: max(0.40, minRange + 0.2)
+};
+
+// ---- Sequences ----
+
+struct SynthOptions {
+  std::string clip = "wave";       // a clips() name; ignored when poseFile is set
+  std::filesystem::path poseFile;  // optional: play a pose JSONL (model::loadPoseSequence) instead
+  std::string profile = "tof";     // a sensorProfiles() name
+  int frameCount = 300;
+  float framesPerSecond = 30.0f;
+  float speed = 1.0f;      // clip time multiplier
+  std::uint64_t seed = 1;  // sensor noise seed
+  Scene scene;
+  model::HandDimensions hand;  // hand size (render surface and model scale together)
+  SurfaceRadii surface;        // render-surface radii for the reference hand size
+};
+
+// Ground truth of one hand in one frame.
+struct HandTruth {
+  model::Side side = model::Side::Right;
+  Keypoints21 keypoints = zeroKeypoints();  // m, camera frame, MediaPipe order
+  model::ModelPose pose;  // per-body world (camera-frame) poses of the hand's model
+};
+
+struct SyntheticFrame {
+  int index = 0;
+  DepthFrame depth;              // as the sensor profile reports it
+  std::vector<HandTruth> hands;  // hand 0 is the right hand when there are two
+};
+
+class SyntheticSequence {
+ public:
+  // Validates the options (clip, profile, pose file, ranges); errors say which is wrong.
+  static Result<SyntheticSequence> create(const SynthOptions& options);
+  SyntheticSequence(SyntheticSequence&&) noexcept;
+  SyntheticSequence& operator=(SyntheticSequence&&) noexcept;
+  ~SyntheticSequence();
+
+  const SynthOptions& options() const;
+  const SensorProfile& profile() const;
+  const Intrinsics& intrinsics() const;
+  int frameCount() const;
+  int handCount() const;
+  // The tracker's model of hand i (default hand at the options' size, its side).
+  const model::ArticulatedModel& model(int hand) const;
+
+  // Renders frame `index` in [0, frameCount()). The reference stays valid until the next
+  // call; the same index always gives the same bytes.
+  const SyntheticFrame& frame(int index);
+  // Ground truth only (no rendering), for hand i.
+  HandTruth truth(int index, int hand) const;
+  // The exact (noise-free) depth of the last rendered frame, m, and its pixel labels.
+  std::span<const float> exactDepth() const;
+  std::span<const PixelLabel> labels() const;
+
+ private:
+  struct State;
+  explicit SyntheticSequence(std::unique_ptr<State> state);
+  std::unique_ptr<State> state_;
+};
+
+// Writes the whole sequence to `dir` (must not hold a sequence): camera.json, depth/,
+// groundtruth.jsonl (hand 0), poses.jsonl (hand 0's model poses, model pose format),
+// for two hands groundtruth_hand1.jsonl and poses_hand1.jsonl, and synth.json (the
+// options, so the sequence can be regenerated). `progress(done, total)` is called after
+// each frame when given; returning false stops early, leaving a valid shorter sequence.
+Status writeSequence(SyntheticSequence& sequence, const std::filesystem::path& dir,
+                     const std::function<bool(int, int)>& progress = {});
+
+// A contact sheet PNG: one row per sensor profile, one column per clip (a frame 45% into
+// it), depth shaded (near red, far blue, no data black) with the ground-truth skeleton drawn
+// on top and labelled. Tiles are 320x240 (640x480 profiles are halved).
+Status writeContactSheet(const std::filesystem::path& pngPath,
+                         const std::vector<std::string>& clipNames, const Scene& scene,
+                         std::uint64_t seed = 1);
+
+}  // namespace dynahand::synth

@@ -1,0 +1,75 @@
+// Camera placements and background geometry (docs/synth.md, "Scene").
+#include "scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace dynahand::synth::detail {
+namespace {
+
+constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
+constexpr float kHeadMountedPitch = 35.0f * kDeg;  // camera looking down, rad
+constexpr float kDeskForearmTilt =
+    15.0f * kDeg;  // elbow further from the camera than the wrist, rad
+
+Quat fromAxes(const Vec3& x, const Vec3& y, const Vec3& z) {
+  Mat3 m;
+  m.col(0) = x;
+  m.col(1) = y;
+  m.col(2) = z;
+  return Quat(m).normalized();
+}
+
+}  // namespace
+
+Vec3 downDirection(CameraPlacement placement) {
+  if (placement == CameraPlacement::HeadMounted)
+    return Vec3(0.0f, std::cos(kHeadMountedPitch), std::sin(kHeadMountedPitch));
+  return Vec3::UnitY();
+}
+
+Pose restPlacement(CameraPlacement placement, float handDistance) {
+  Pose pose;
+  if (placement == CameraPlacement::DeskFacing) {
+    // Palm toward the camera, fingers up: radial = +x, dorsal = +z (away), distal = -y (up);
+    // tilted so the forearm runs down and away, entering from the bottom border.
+    const Quat upright = fromAxes(Vec3::UnitX(), Vec3::UnitZ(), -Vec3::UnitY());
+    pose.q = (Quat(Eigen::AngleAxisf(kDeskForearmTilt, Vec3::UnitX())) * upright).normalized();
+    pose.p = Vec3(0.0f, 0.07f, handDistance);
+  } else {
+    // Palm down, fingers forward, seen from behind and above: the back of the hand faces
+    // the camera and the forearm comes up from the bottom border.
+    const Vec3 down = downDirection(placement);
+    const Vec3 forward(0.0f, -std::sin(kHeadMountedPitch), std::cos(kHeadMountedPitch));
+    const Vec3 dorsal = -down;
+    pose.q = fromAxes(dorsal.cross(forward), dorsal, forward);
+    pose.p = Vec3(0.0f, 0.06f, handDistance);
+  }
+  return pose;
+}
+
+float resolvedHandDistance(const Scene& scene, const SensorProfile& profile) {
+  return scene.handDistance > 0.0f ? scene.handDistance : std::max(0.40f, profile.minRange + 0.2f);
+}
+
+SceneGeometry sceneGeometry(const Scene& scene, float handDistance) {
+  SceneGeometry g;
+  const float behind = handDistance + scene.backgroundDistance;
+  if (scene.background == Background::Wall) g.planes.push_back(Plane{Vec3::UnitZ(), behind});
+  if (scene.background == Background::Torso) {
+    // A standing torso: an upright, slightly tapered capsule, its front surface `behind` away.
+    constexpr float kTorsoRadius = 0.16f;
+    g.solids.push_back(RoundCone{Vec3(0.0f, -0.35f, behind + kTorsoRadius),
+                                 Vec3(0.0f, 0.60f, behind + kTorsoRadius), kTorsoRadius,
+                                 1.1f * kTorsoRadius});
+  }
+  if (scene.table) {
+    const Vec3 down = downDirection(scene.placement);
+    const Vec3 wrist = restPlacement(scene.placement, handDistance).p;
+    g.planes.push_back(Plane{down, down.dot(wrist) + scene.tableDrop});
+  }
+  return g;
+}
+
+}  // namespace dynahand::synth::detail

@@ -1,0 +1,27 @@
+// Internal: camera placement of the hands and the static background of a scene.
+#pragma once
+
+#include <vector>
+
+#include "dynahand/synth.h"
+
+namespace dynahand::synth::detail {
+
+// The right hand's rest pose (forearm body frame: x radial, y dorsal, z distal, origin at
+// the wrist) in the camera frame, for a hand at `handDistance` m.
+Pose restPlacement(CameraPlacement placement, float handDistance);
+
+// World "down" in the camera frame (unit).
+Vec3 downDirection(CameraPlacement placement);
+
+// Static background of the scene: planes (wall, table) and solids (torso).
+struct SceneGeometry {
+  std::vector<Plane> planes;
+  std::vector<RoundCone> solids;
+};
+SceneGeometry sceneGeometry(const Scene& scene, float handDistance);
+
+// The hand distance the scene uses for a profile (resolves handDistance = 0).
+float resolvedHandDistance(const Scene& scene, const SensorProfile& profile);
+
+}  // namespace dynahand::synth::detail

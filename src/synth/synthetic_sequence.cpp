@@ -1,0 +1,189 @@
+// SyntheticSequence: clip (or pose file) -> model joint angles -> forward kinematics ->
+// 21 keypoints + per-body poses (ground truth) -> render surface -> exact depth -> sensor.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <string>
+
+#include "clip_library.h"
+#include "dynahand/synth.h"
+#include "scene.h"
+
+namespace dynahand::synth {
+namespace {
+
+constexpr float kReferenceWidth = 0.085f;  // m, SurfaceRadii are given for this palm width
+constexpr float kForearmPerLength = 1.4f;  // forearm length / hand length (elbow beyond the image)
+
+Status validate(const SynthOptions& o) {
+  auto bad = [](const std::string& what) { return Status(Error{"synth options: " + what}); };
+  if (o.frameCount < 1)
+    return bad("frame count must be at least 1 (got " + std::to_string(o.frameCount) + ")");
+  if (!(o.framesPerSecond > 0.0f && o.framesPerSecond <= 1000.0f))
+    return bad("frames per second must be in (0, 1000]");
+  if (!(o.speed > 0.0f && o.speed <= 100.0f)) return bad("speed must be in (0, 100]");
+  if (!(o.hand.length >= 0.10f && o.hand.length <= 0.30f))
+    return bad("hand length must be in [0.10, 0.30] m");
+  if (!(o.hand.width >= 0.05f && o.hand.width <= 0.13f))
+    return bad("hand width must be in [0.05, 0.13] m");
+  if (!(o.scene.backgroundDistance >= 0.02f && o.scene.backgroundDistance <= 5.0f))
+    return bad("background distance must be in [0.02, 5] m");
+  if (!(o.scene.tableDrop >= 0.0f && o.scene.tableDrop <= 2.0f))
+    return bad("table drop must be in [0, 2] m");
+  if (!(o.scene.handDistance == 0.0f ||
+        (o.scene.handDistance >= 0.1f && o.scene.handDistance <= 3.0f)))
+    return bad("hand distance must be 0 (auto) or in [0.1, 3] m");
+  return Ok{};
+}
+
+}  // namespace
+
+struct SyntheticSequence::State {
+  SynthOptions options;
+  SensorProfile profile;
+  std::vector<model::ArticulatedModel> models;  // per hand
+  const detail::ClipDefinition* clip = nullptr;
+  model::PoseSequence poseFile;  // frames played when options.poseFile is set
+  Pose rest;                     // right hand's rest placement, camera frame
+  float surfaceScale = 1.0f;
+  DepthRenderer renderer;
+  SensorSimulator sensor;
+  // Per-frame buffers (reused).
+  SyntheticFrame frame;
+  std::vector<HandMotionSample> samples;
+  std::vector<RoundCone> surface;
+
+  State(const SynthOptions& o, SensorProfile p)
+      : options(o), profile(p), renderer(p.intrinsics), sensor(p, o.seed) {}
+
+  // Joint angles of hand h at frame `index`, root in the camera frame.
+  void anglesAt(int index, std::vector<HandMotionSample>& out) const {
+    if (!options.poseFile.empty()) {
+      out.resize(1);
+      out[0].side = model::Side::Right;
+      const auto& poses = poseFile.frames;
+      out[0].angles =
+          model::jointAngles(models[0], poses[static_cast<std::size_t>(index) % poses.size()]);
+      return;
+    }
+    const float time = static_cast<float>(index) / options.framesPerSecond * options.speed;
+    detail::sampleClipInto(*clip, time, out);
+    for (HandMotionSample& s : out) {
+      s.angles.root = rest * s.angles.root;
+      if (s.side == model::Side::Left) s.angles = model::mirrorAngles(s.angles);
+    }
+  }
+
+  void truthFor(const HandMotionSample& sample, int hand, HandTruth& out) const {
+    const model::ArticulatedModel& m = models[static_cast<std::size_t>(hand)];
+    out.side = sample.side;
+    model::forwardKinematicsInto(m, sample.angles, out.pose);
+    out.keypoints = model::keypoints21(m, out.pose);
+  }
+};
+
+SyntheticSequence::SyntheticSequence(std::unique_ptr<State> state) : state_(std::move(state)) {}
+SyntheticSequence::SyntheticSequence(SyntheticSequence&&) noexcept = default;
+SyntheticSequence& SyntheticSequence::operator=(SyntheticSequence&&) noexcept = default;
+SyntheticSequence::~SyntheticSequence() = default;
+
+Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options) {
+  if (Status s = validate(options); !s) return s.error();
+  Result<SensorProfile> profile = findSensorProfile(options.profile);
+  if (!profile) return profile.error();
+  auto state = std::make_unique<State>(options, *profile);
+
+  int handCount = 1;
+  if (options.poseFile.empty()) {
+    state->clip = detail::findClip(options.clip);
+    if (!state->clip) {
+      std::string names;
+      for (const ClipInfo& info : clips()) names += (names.empty() ? "" : ", ") + info.name;
+      return Error{"unknown clip '" + options.clip + "' (known: " + names + ")"};
+    }
+    handCount = state->clip->info.handCount;
+  }
+  state->models.push_back(model::makeDefaultHand(options.hand, model::Side::Right));
+  if (handCount == 2)
+    state->models.push_back(model::makeDefaultHand(options.hand, model::Side::Left));
+  if (!options.poseFile.empty()) {
+    Result<model::PoseSequence> poses = model::loadPoseSequence(options.poseFile);
+    if (!poses) return poses.error();
+    if (poses->frames.empty()) return Error{options.poseFile.string() + ": no poses"};
+    if (Status s = model::checkPoseSequence(*poses, state->models[0]); !s)
+      return Error{options.poseFile.string() + ": " + s.message()};
+    state->poseFile = std::move(poses).value();
+  }
+
+  const float handDistance = detail::resolvedHandDistance(options.scene, state->profile);
+  state->rest = detail::restPlacement(options.scene.placement, handDistance);
+  const detail::SceneGeometry geometry = detail::sceneGeometry(options.scene, handDistance);
+  state->renderer.setBackground(geometry.planes, geometry.solids);
+  state->surfaceScale = options.hand.width / kReferenceWidth;
+  state->surface.reserve(static_cast<std::size_t>(kMaxHandPrimitives * handCount));
+  state->frame.hands.resize(static_cast<std::size_t>(handCount));
+  return SyntheticSequence(std::move(state));
+}
+
+const SynthOptions& SyntheticSequence::options() const {
+  return state_->options;
+}
+const SensorProfile& SyntheticSequence::profile() const {
+  return state_->profile;
+}
+const Intrinsics& SyntheticSequence::intrinsics() const {
+  return state_->profile.intrinsics;
+}
+int SyntheticSequence::frameCount() const {
+  return state_->options.frameCount;
+}
+int SyntheticSequence::handCount() const {
+  return static_cast<int>(state_->models.size());
+}
+const model::ArticulatedModel& SyntheticSequence::model(int hand) const {
+  assert(hand >= 0 && hand < handCount());
+  return state_->models[static_cast<std::size_t>(hand)];
+}
+std::span<const float> SyntheticSequence::exactDepth() const {
+  return state_->renderer.depth();
+}
+std::span<const PixelLabel> SyntheticSequence::labels() const {
+  return state_->renderer.labels();
+}
+
+HandTruth SyntheticSequence::truth(int index, int hand) const {
+  assert(index >= 0 && index < frameCount() && hand >= 0 && hand < handCount());
+  std::vector<HandMotionSample> samples;
+  state_->anglesAt(index, samples);
+  HandTruth truth;
+  state_->truthFor(samples[static_cast<std::size_t>(hand)], hand, truth);
+  return truth;
+}
+
+const SyntheticFrame& SyntheticSequence::frame(int index) {
+  assert(index >= 0 && index < frameCount());
+  State& s = *state_;
+  s.anglesAt(index, s.samples);
+  s.frame.index = index;
+  s.renderer.clear();
+  for (std::size_t h = 0; h < s.samples.size(); ++h) {
+    HandTruth& truth = s.frame.hands[h];
+    s.truthFor(s.samples[h], static_cast<int>(h), truth);
+    HandSkeleton skeleton;
+    skeleton.keypoints = truth.keypoints;
+    const Pose& forearm = truth.pose.bodies[static_cast<std::size_t>(s.models[h].root())];
+    skeleton.elbow =
+        forearm.transform(Vec3(0.0f, 0.0f, -kForearmPerLength * s.options.hand.length));
+    skeleton.leftHand = truth.side == model::Side::Left;
+    skeleton.scale = s.surfaceScale;
+    s.surface.clear();
+    buildHandSurface(skeleton, s.options.surface, s.surface);
+    s.renderer.draw(s.surface, h == 0 ? PixelLabel::Hand0 : PixelLabel::Hand1);
+  }
+  s.sensor.apply(s.renderer.depth(), s.renderer.labels(), index,
+                 static_cast<double>(index) / static_cast<double>(s.options.framesPerSecond),
+                 s.frame.depth);
+  return s.frame;
+}
+
+}  // namespace dynahand::synth

@@ -1,0 +1,298 @@
+// Synthetic sequences: clips within the joint limits, ground truth consistent with the
+// rendered image and the model, reproducibility, scenes, pose-file playback, disk round trip.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "dynahand/sequence.h"
+#include "dynahand/synth.h"
+#include "test_support.h"
+
+namespace dynahand::synth {
+namespace {
+
+SynthOptions optionsFor(const std::string& clip, const std::string& profile = "ideal",
+                        int frames = 60) {
+  SynthOptions o;
+  o.clip = clip;
+  o.profile = profile;
+  o.frameCount = frames;
+  return o;
+}
+
+TEST(Clips, EveryClipStaysWithinTheJointLimits) {
+  const model::ArticulatedModel hand = model::makeDefaultHand();
+  ASSERT_GE(clips().size(), 11u);
+  for (const ClipInfo& clip : clips()) {
+    for (int i = 0; i <= 40; ++i) {
+      const float t = clip.duration * static_cast<float>(i) / 40.0f;
+      Result<std::vector<HandMotionSample>> samples = sampleClip(clip.name, hand, t);
+      ASSERT_TRUE(samples.ok()) << samples.message();
+      ASSERT_EQ(static_cast<int>(samples->size()), clip.handCount);
+      for (const HandMotionSample& s : *samples)
+        EXPECT_TRUE(model::withinLimits(hand, s.angles, 1e-4f)) << clip.name << " at t = " << t;
+    }
+  }
+}
+
+// The clips are authored with abduction toward the thumb and flexion toward the palm: the
+// "spread" clip must move the index fingertip radially and "open-close" curl the fingers
+// toward the palm.
+TEST(Clips, AuthoredAnglesMoveTheFingersTheIntendedWay) {
+  const model::ArticulatedModel hand = model::makeDefaultHand();
+  auto tips = [&](const std::string& clip, float t) {
+    Result<std::vector<HandMotionSample>> s = sampleClip(clip, hand, t);
+    model::JointAngles angles = (*s)[0].angles;
+    angles.root = Pose::identity();  // forearm frame: x radial, y dorsal, z distal
+    return model::keypoints21(hand, model::forwardKinematics(hand, angles));
+  };
+  const Keypoints21 together = tips("spread", 0.1f), spread = tips("spread", 1.1f);
+  EXPECT_GT(spread[8].x() - together[8].x(), 0.01f);     // index toward the thumb (+x)
+  EXPECT_LT(spread[20].x() - together[20].x(), -0.01f);  // pinky away from it
+  const Keypoints21 open = tips("open-close", 0.1f), fist = tips("open-close", 1.1f);
+  EXPECT_LT(fist[10].y() - open[10].y(), -0.02f);  // middle PIP toward the palm (-y)
+  EXPECT_LT((fist[12] - fist[0]).norm(), (open[12] - open[0]).norm() - 0.08f);  // tip curled in
+}
+
+TEST(Clips, DefaultSetNamesExistingClipsAndLoops) {
+  const model::ArticulatedModel hand = model::makeDefaultHand();
+  for (const std::string& name : defaultClipSet()) {
+    const auto info = std::find_if(clips().begin(), clips().end(),
+                                   [&](const ClipInfo& c) { return c.name == name; });
+    ASSERT_NE(info, clips().end()) << name;
+    // Looping: t and t + duration give the same pose.
+    const auto a = sampleClip(name, hand, 0.3f);
+    const auto b = sampleClip(name, hand, 0.3f + info->duration);
+    ASSERT_TRUE(a.ok() && b.ok());
+    for (std::size_t j = 0; j < (*a)[0].angles.angles.size(); ++j)
+      EXPECT_NEAR(((*a)[0].angles.angles[j] - (*b)[0].angles.angles[j]).norm(), 0.0f, 1e-4f);
+  }
+}
+
+TEST(Clips, UnknownClipIsAnErrorListingTheClips) {
+  const auto r = sampleClip("moonwalk", model::makeDefaultHand(), 0.0f);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.message().find("moonwalk"), std::string::npos);
+  EXPECT_NE(r.message().find("wave"), std::string::npos);
+}
+
+TEST(SyntheticSequence, BadOptionsAreErrorsNamingTheProblem) {
+  auto expectError = [](SynthOptions o, const std::string& needle) {
+    const Result<SyntheticSequence> s = SyntheticSequence::create(o);
+    ASSERT_FALSE(s.ok()) << needle;
+    EXPECT_NE(s.message().find(needle), std::string::npos) << s.message();
+  };
+  SynthOptions o = optionsFor("wave");
+  o.frameCount = 0;
+  expectError(o, "frame count");
+  o = optionsFor("wave");
+  o.speed = -1.0f;
+  expectError(o, "speed");
+  o = optionsFor("wave");
+  o.framesPerSecond = 0.0f;
+  expectError(o, "frames per second");
+  o = optionsFor("wave", "lidar");
+  expectError(o, "lidar");
+  o = optionsFor("no-such-clip");
+  expectError(o, "no-such-clip");
+  o = optionsFor("wave");
+  o.hand.length = 0.5f;
+  expectError(o, "hand length");
+  o = optionsFor("wave");
+  o.poseFile = "/nonexistent/poses.jsonl";
+  expectError(o, "/nonexistent/poses.jsonl");
+}
+
+// Every ground-truth keypoint projects onto a pixel the renderer labelled as a hand.
+TEST(SyntheticSequence, KeypointsProjectInsideTheRenderedHandMask) {
+  for (const ClipInfo& clip : clips()) {
+    for (const CameraPlacement placement :
+         {CameraPlacement::DeskFacing, CameraPlacement::HeadMounted}) {
+      SynthOptions o = optionsFor(clip.name);
+      o.scene.placement = placement;
+      o.scene.background = Background::Wall;
+      Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+      ASSERT_TRUE(seq.ok()) << seq.message();
+      const Intrinsics& k = seq->intrinsics();
+      for (int f = 0; f < o.frameCount; f += 7) {
+        const SyntheticFrame& frame = seq->frame(f);
+        for (const HandTruth& hand : frame.hands) {
+          for (std::size_t i = 0; i < 21; ++i) {
+            const Vec2 uv = k.project(hand.keypoints[i]);
+            ASSERT_TRUE(k.contains(uv.x(), uv.y()))
+                << clip.name << " frame " << f << " keypoint " << i;
+            const int u = static_cast<int>(std::lround(uv.x())),
+                      v = static_cast<int>(std::lround(uv.y()));
+            const PixelLabel label = seq->labels()[static_cast<std::size_t>(v) * k.width + u];
+            EXPECT_TRUE(label == PixelLabel::Hand0 || label == PixelLabel::Hand1)
+                << clip.name << (placement == CameraPlacement::HeadMounted ? " head" : " desk")
+                << " frame " << f << " keypoint " << i;
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(SyntheticSequence, GroundTruthMatchesTheModelPoseAndIsTheRightSize) {
+  for (const float length : {0.16f, 0.19f, 0.22f}) {
+    SynthOptions o = optionsFor("wave");
+    o.hand.length = length;
+    o.hand.width = 0.085f * length / 0.19f;
+    Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+    ASSERT_TRUE(seq.ok());
+    const HandTruth truth = seq->truth(5, 0);
+    const Keypoints21 fromPose = model::keypoints21(seq->model(0), truth.pose);
+    for (std::size_t i = 0; i < 21; ++i)
+      EXPECT_LT((fromPose[i] - truth.keypoints[i]).norm(), 1e-6f);
+    // Flat hand: wrist to middle fingertip is the hand length (to a few mm of joint bend).
+    EXPECT_NEAR((truth.keypoints[12] - truth.keypoints[0]).norm(), length, 0.02f * length / 0.19f);
+    // truth() without rendering equals the rendered frame's truth.
+    const SyntheticFrame& frame = seq->frame(5);
+    for (std::size_t i = 0; i < 21; ++i) EXPECT_EQ(frame.hands[0].keypoints[i], truth.keypoints[i]);
+  }
+}
+
+TEST(SyntheticSequence, SameSeedSameBytesInAnyOrderAndSeedsDiffer) {
+  SynthOptions o = optionsFor("pinch", "tof", 10);
+  o.scene.background = Background::Torso;
+  Result<SyntheticSequence> a = SyntheticSequence::create(o), b = SyntheticSequence::create(o);
+  o.seed = 2;
+  Result<SyntheticSequence> c = SyntheticSequence::create(o);
+  ASSERT_TRUE(a.ok() && b.ok() && c.ok());
+  std::vector<std::vector<std::uint16_t>> forward;
+  for (int f = 0; f < 10; ++f) forward.push_back(a->frame(f).depth.depth);
+  for (int f = 9; f >= 0; --f)
+    EXPECT_EQ(b->frame(f).depth.depth, forward[static_cast<std::size_t>(f)]) << f;
+  EXPECT_NE(c->frame(3).depth.depth, forward[3]);
+}
+
+TEST(SyntheticSequence, TwoHandsAreARightAndAMirroredLeftHand) {
+  Result<SyntheticSequence> seq = SyntheticSequence::create(optionsFor("two-hands"));
+  ASSERT_TRUE(seq.ok());
+  ASSERT_EQ(seq->handCount(), 2);
+  const SyntheticFrame& frame = seq->frame(0);
+  ASSERT_EQ(frame.hands.size(), 2u);
+  EXPECT_EQ(frame.hands[0].side, model::Side::Right);
+  EXPECT_EQ(frame.hands[1].side, model::Side::Left);
+  EXPECT_GT(frame.hands[0].keypoints[0].x(), 0.05f);  // right hand on the image's right
+  EXPECT_LT(frame.hands[1].keypoints[0].x(), -0.05f);
+  int left = 0, right = 0;
+  for (const PixelLabel l : seq->labels()) {
+    right += l == PixelLabel::Hand0;
+    left += l == PixelLabel::Hand1;
+  }
+  EXPECT_GT(left, 500);
+  EXPECT_GT(right, 500);
+}
+
+TEST(SyntheticSequence, SceneBackgroundTableAndForearmEnteringFromTheBorder) {
+  for (const CameraPlacement placement :
+       {CameraPlacement::DeskFacing, CameraPlacement::HeadMounted}) {
+    SynthOptions o = optionsFor("open-close");
+    o.scene.placement = placement;
+    o.scene.background = Background::Wall;
+    o.scene.table = true;
+    Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+    ASSERT_TRUE(seq.ok());
+    seq->frame(0);
+    const Intrinsics& k = seq->intrinsics();
+    int bottomHand = 0, background = 0;
+    for (int u = 0; u < k.width; ++u)
+      bottomHand +=
+          seq->labels()[static_cast<std::size_t>(k.height - 1) * k.width + u] == PixelLabel::Hand0;
+    for (const PixelLabel l : seq->labels()) background += l == PixelLabel::Background;
+    EXPECT_GT(bottomHand, 10) << "the forearm should cross the bottom border";
+    EXPECT_GT(background, k.width * k.height / 2);
+    // Nothing but the hand is nearer than the wall.
+    const float wall = seq->truth(0, 0).keypoints[0].z() + o.scene.backgroundDistance;
+    for (std::size_t i = 0; i < seq->exactDepth().size(); ++i)
+      if (seq->labels()[i] == PixelLabel::Background) {
+        ASSERT_LE(seq->exactDepth()[i], wall + 0.05f);
+      }
+  }
+}
+
+TEST(SyntheticSequence, PoseFilePlaybackReproducesTheRecordedPoses) {
+  const std::filesystem::path dir = test::scratchDir("synth_pose_playback");
+  SynthOptions o = optionsFor("count", "ideal", 12);
+  Result<SyntheticSequence> original = SyntheticSequence::create(o);
+  ASSERT_TRUE(original.ok());
+  model::PoseSequence poses;
+  for (const model::Body& b : original->model(0).bodies()) poses.bodyNames.push_back(b.name);
+  for (int f = 0; f < 12; ++f) poses.frames.push_back(original->truth(f, 0).pose);
+  ASSERT_TRUE(model::savePoseSequence(poses, dir / "poses.jsonl").ok());
+
+  SynthOptions replay = o;
+  replay.poseFile = dir / "poses.jsonl";
+  Result<SyntheticSequence> played = SyntheticSequence::create(replay);
+  ASSERT_TRUE(played.ok()) << played.message();
+  for (int f = 0; f < 12; ++f) {
+    const HandTruth a = original->truth(f, 0), b = played->truth(f, 0);
+    for (std::size_t i = 0; i < 21; ++i)
+      EXPECT_LT((a.keypoints[i] - b.keypoints[i]).norm(), 1e-4f) << f << " " << i;
+  }
+}
+
+TEST(SyntheticSequence, WrittenSequenceReadsBackWithGroundTruthAndPoses) {
+  const std::filesystem::path dir = test::scratchDir("synth_write") / "seq";
+  Result<SyntheticSequence> seq = SyntheticSequence::create(optionsFor("two-hands", "tof", 6));
+  ASSERT_TRUE(seq.ok());
+  int calls = 0;
+  ASSERT_TRUE(writeSequence(*seq, dir, [&](int done, int total) {
+                EXPECT_EQ(total, 6);
+                EXPECT_EQ(done, ++calls);
+                return true;
+              }).ok());
+  Result<SequenceReader> reader = SequenceReader::open(dir);
+  ASSERT_TRUE(reader.ok()) << reader.message();
+  ASSERT_EQ(reader->frameCount(), 6);
+  EXPECT_EQ(reader->info().intrinsics.width, 320);
+  const Result<model::PoseSequence> poses = model::loadPoseSequence(dir / "poses.jsonl");
+  ASSERT_TRUE(poses.ok()) << poses.message();
+  ASSERT_EQ(poses->frames.size(), 6u);
+  EXPECT_TRUE(model::loadPoseSequence(dir / "poses_hand1.jsonl").ok());
+  EXPECT_TRUE(std::filesystem::exists(dir / "groundtruth_hand1.jsonl"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "synth.json"));
+  for (int f = 0; f < 6; ++f) {
+    const SyntheticFrame& frame = seq->frame(f);
+    const Result<DepthFrame> read = reader->frame(f);
+    ASSERT_TRUE(read.ok());
+    EXPECT_EQ(read->depth, frame.depth.depth);
+    const std::optional<Keypoints21> truth = reader->groundTruth(f);
+    ASSERT_TRUE(truth.has_value());
+    for (std::size_t i = 0; i < 21; ++i)
+      EXPECT_LT(((*truth)[i] - frame.hands[0].keypoints[i]).norm(), 1e-5f);
+    const Keypoints21 fromPose =
+        model::keypoints21(seq->model(0), poses->frames[static_cast<std::size_t>(f)]);
+    for (std::size_t i = 0; i < 21; ++i)
+      EXPECT_LT((fromPose[i] - frame.hands[0].keypoints[i]).norm(), 1e-5f);
+  }
+  // A second write into the same folder is refused.
+  EXPECT_FALSE(writeSequence(*seq, dir).ok());
+}
+
+TEST(SyntheticSequence, StoppingEarlyLeavesAValidShorterSequence) {
+  const std::filesystem::path dir = test::scratchDir("synth_stop") / "seq";
+  Result<SyntheticSequence> seq = SyntheticSequence::create(optionsFor("wave", "tof", 10));
+  ASSERT_TRUE(seq.ok());
+  ASSERT_TRUE(writeSequence(*seq, dir, [](int done, int) { return done < 4; }).ok());
+  Result<SequenceReader> reader = SequenceReader::open(dir);
+  ASSERT_TRUE(reader.ok());
+  EXPECT_EQ(reader->frameCount(), 4);
+}
+
+TEST(ContactSheet, WritesAPngWithATilePerProfileAndClip) {
+  const std::filesystem::path png = test::scratchDir("synth_sheet") / "sheet.png";
+  Scene scene;
+  scene.background = Background::Wall;
+  ASSERT_TRUE(writeContactSheet(png, {"wave", "pinch"}, scene).ok());
+  ASSERT_TRUE(std::filesystem::exists(png));
+  EXPECT_GT(std::filesystem::file_size(png), 10000u);
+  EXPECT_FALSE(writeContactSheet(png, {"nope"}, scene).ok());
+  EXPECT_FALSE(writeContactSheet(png, {}, scene).ok());
+}
+
+}  // namespace
+}  // namespace dynahand::synth

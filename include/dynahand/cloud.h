@@ -76,7 +76,7 @@ struct CloudConfig {
   // hand's depth is at most half a voxel, so every voxel still averages >= 4 samples;
   // 2 for a hand at 0.55 m in 640x480, 1 in 320x240.
   int sampleStride = 0;
-  int maxVoxels = 16384;  // per frame; extra points are dropped and counted
+  int maxVoxels = 8192;  // per frame (<= 65535); extra samples are dropped and counted
   BoundaryPlaneConfig planes;
   float planeMarginPixels = 0.5f;  // boundary planes clear the pixel footprint by this much
 };

@@ -19,7 +19,7 @@ namespace dynahand {
 
 class VoxelGrid {
  public:
-  // voxelSizeM > 0: voxel edge, m. maxVoxels > 0: occupied voxels per frame; a point
+  // voxelSizeM > 0: voxel edge, m. 0 < maxVoxels <= 65535: occupied voxels per frame; a point
   // that would open voxel maxVoxels + 1 is dropped and counted in droppedPoints().
   VoxelGrid(float voxelSizeM, int maxVoxels);
 
@@ -51,22 +51,20 @@ class VoxelGrid {
   float inverseVoxelSize_;
   int maxVoxels_;
   std::uint32_t slotMask_;
-  std::uint32_t stamp_ = 1;
   int voxelCount_ = 0;
   int droppedPoints_ = 0;
-  // Hash table (slotCount): one 16-byte slot per entry, so a probe touches one cache line.
-  struct Slot {
-    std::uint64_t key = 0;    // packed voxel coordinates
-    std::uint32_t stamp = 0;  // clear() generation that wrote it; other values = empty
-    std::int32_t voxel = 0;   // index into the per-voxel arrays
-  };
-  std::vector<Slot> slots_;
+  // Hash table (slotCount): 4 bytes per slot (16-bit clear() generation, 16-bit voxel
+  // index), so the table stays cache-resident (64 KB at the default capacity); the full
+  // keys live in the dense per-voxel array key_.
+  std::vector<std::uint32_t> slots_;
+  std::uint16_t stamp16_ = 1;
   // The last voxel hit: neighbouring pixels usually share a voxel, so most points skip
   // the table lookup.
   std::uint64_t lastKey_ = 0;
   std::int32_t lastVoxel_ = -1;
   // Per voxel, (maxVoxels): coordinate sums relative to the voxel's lower corner (m),
   // kept small so float sums stay accurate; the corner; point count; first tag.
+  std::vector<std::uint64_t> key_;  // packed voxel coordinates
   std::vector<Vec3> sum_;
   std::vector<Vec3> corner_;
   std::vector<int> count_;

@@ -396,7 +396,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       const int blockU1 = std::min(k.width, pu - blockOffset + stride);
       for (int mv = blockV0; mv < blockV1; ++mv) {
         std::uint8_t* maskRow = out.mask.data() + static_cast<std::size_t>(mv) * k.width;
-        std::fill(maskRow + blockU0, maskRow + blockU1, std::uint8_t{1});
+        // A plain loop: blocks are 1-4 bytes, too short for a memset call.
+        for (int mu = blockU0; mu < blockU1; ++mu) maskRow[mu] = 1;
       }
       maskPixels += (blockV1 - blockV0) * (blockU1 - blockU0);
       if (rowMin < 0) rowMin = pu;

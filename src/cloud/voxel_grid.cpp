@@ -34,12 +34,13 @@ std::uint64_t packKey(std::int32_t ix, std::int32_t iy, std::int32_t iz) {
 VoxelGrid::VoxelGrid(float voxelSizeM, int maxVoxels)
     : voxelSize_(voxelSizeM), inverseVoxelSize_(1.0f / voxelSizeM), maxVoxels_(maxVoxels) {
   assert(voxelSizeM > 0.0f && std::isfinite(voxelSizeM) && "voxel size must be positive");
-  assert(maxVoxels > 0 && "maxVoxels must be positive");
+  assert(maxVoxels > 0 && maxVoxels <= 65535 && "maxVoxels must be in [1, 65535]");
   // Load factor at most 1/2 keeps probe sequences short.
   const std::uint32_t slotCount = std::bit_ceil(static_cast<std::uint32_t>(maxVoxels) * 2u);
   slotMask_ = slotCount - 1u;
-  slots_.assign(slotCount, Slot{});
+  slots_.assign(slotCount, 0u);
   const auto n = static_cast<std::size_t>(maxVoxels);
+  key_.assign(n, 0);
   sum_.assign(n, Vec3::Zero());
   corner_.assign(n, Vec3::Zero());
   count_.assign(n, 0);
@@ -50,10 +51,10 @@ void VoxelGrid::clear() {
   voxelCount_ = 0;
   droppedPoints_ = 0;
   lastVoxel_ = -1;
-  ++stamp_;
-  if (stamp_ == 0) {  // wrapped after 2^32 frames: stale stamps could alias, so wipe once
-    for (Slot& slot : slots_) slot.stamp = 0;
-    stamp_ = 1;
+  ++stamp16_;
+  if (stamp16_ == 0) {  // wrapped after 65535 frames: stale stamps could alias, so wipe once
+    std::fill(slots_.begin(), slots_.end(), 0u);
+    stamp16_ = 1;
   }
 }
 
@@ -82,15 +83,16 @@ bool VoxelGrid::add(const Vec3& point, std::int32_t tag) {
   const std::uint64_t yz = packKey(0, iy, iz);
   std::uint32_t index =
       (static_cast<std::uint32_t>(mixKey(yz)) + static_cast<std::uint32_t>(ix)) & slotMask_;
+  const std::uint32_t stampBits = static_cast<std::uint32_t>(stamp16_) << 16;
   for (;;) {
-    Slot& slot = slots_[index];
-    if (slot.stamp != stamp_) break;  // empty this frame: a new voxel
-    if (slot.key == key) {
-      const auto v = static_cast<std::size_t>(slot.voxel);
+    const std::uint32_t slot = slots_[index];
+    if ((slot & 0xffff0000u) != stampBits) break;  // empty this frame: a new voxel
+    const auto v = static_cast<std::size_t>(slot & 0xffffu);
+    if (key_[v] == key) {
       sum_[v] += point - corner_[v];
       ++count_[v];
       lastKey_ = key;
-      lastVoxel_ = slot.voxel;
+      lastVoxel_ = static_cast<std::int32_t>(v);
       return true;
     }
     index = (index + 1u) & slotMask_;
@@ -100,17 +102,15 @@ bool VoxelGrid::add(const Vec3& point, std::int32_t tag) {
     return false;
   }
   const auto v = static_cast<std::size_t>(voxelCount_++);
-  Slot& slot = slots_[index];
-  slot.stamp = stamp_;
-  slot.key = key;
-  slot.voxel = static_cast<std::int32_t>(v);
+  slots_[index] = stampBits | static_cast<std::uint32_t>(v);
+  key_[v] = key;
   corner_[v] =
       Vec3(static_cast<float>(ix), static_cast<float>(iy), static_cast<float>(iz)) * voxelSize_;
   sum_[v] = point - corner_[v];
   count_[v] = 1;
   firstTag_[v] = tag;
   lastKey_ = key;
-  lastVoxel_ = slot.voxel;
+  lastVoxel_ = static_cast<std::int32_t>(v);
   return true;
 }
 

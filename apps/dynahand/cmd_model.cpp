@@ -20,7 +20,8 @@ const CommandRegistration kRegistration{Command{
         std::string out, fromIntel, check;
       };
       auto flags = std::make_shared<Flags>();
-      sub.add_option("--length", flags->dims.length, "hand length, wrist crease to middle fingertip, m")
+      sub.add_option("--length", flags->dims.length,
+                     "hand length, wrist crease to middle fingertip, m")
           ->capture_default_str()
           ->check(CLI::Range(0.10, 0.30));
       sub.add_option("--width", flags->dims.width, "palm width across the knuckles, m")
@@ -30,9 +31,11 @@ const CommandRegistration kRegistration{Command{
       sub.add_flag("--right", flags->right, "a right hand (the default)");
       sub.add_option("-o,--out", flags->out, "output file (default: standard output)");
       sub.add_option("--from-intel", flags->fromIntel,
-                     "convert the original authors' model_hand.json instead (--length/--width/--left then ignored)")
+                     "convert the original authors' model_hand.json instead "
+                     "(--length/--width/--left then ignored)")
           ->check(CLI::ExistingFile);
-      sub.add_option("--check", flags->check, "validate a model file, print a summary and exit")->check(CLI::ExistingFile);
+      sub.add_option("--check", flags->check, "validate a model file, print a summary and exit")
+          ->check(CLI::ExistingFile);
       sub.footer(
           "Examples:\n"
           "  dynahand model > right.json\n"
@@ -50,9 +53,10 @@ const CommandRegistration kRegistration{Command{
           }
           float mass = 0.0f;
           for (const model::Body& b : m->bodies()) mass += b.mass;
-          std::printf("%s: ok: '%s', %d bodies, %d joints, %zu keypoints, %.3f kg%s\n", flags->check.c_str(),
-                      m->metadata().name.c_str(), m->bodyCount(), m->jointCount(), m->keypoints().size(),
-                      static_cast<double>(mass), m->hasKeypoints21() ? ", 21 hand keypoints" : "");
+          std::printf("%s: ok: '%s', %d bodies, %d joints, %zu keypoints, %.3f kg%s\n",
+                      flags->check.c_str(), m->metadata().name.c_str(), m->bodyCount(),
+                      m->jointCount(), m->keypoints().size(), static_cast<double>(mass),
+                      m->hasKeypoints21() ? ", 21 hand keypoints" : "");
           return kExitOk;
         }
         std::string text;
@@ -64,8 +68,8 @@ const CommandRegistration kRegistration{Command{
           }
           text = model::modelToJson(imported->model);
         } else {
-          text = model::modelToJson(
-              model::makeDefaultHand(flags->dims, flags->left ? model::Side::Left : model::Side::Right));
+          text = model::modelToJson(model::makeDefaultHand(
+              flags->dims, flags->left ? model::Side::Left : model::Side::Right));
         }
         if (flags->out.empty()) {
           std::fwrite(text.data(), 1, text.size(), stdout);

@@ -25,11 +25,13 @@ std::vector<JointAngles> randomPoses(int count) {
     for (size_t j = 0; j < a.angles.size(); ++j) {
       const Joint& joint = hand().joints()[j];
       for (int axis = 0; axis < 3; ++axis) {
-        a.angles[j][axis] = joint.minAngle[axis] + unit(rng) * (joint.maxAngle[axis] - joint.minAngle[axis]);
+        a.angles[j][axis] =
+            joint.minAngle[axis] + unit(rng) * (joint.maxAngle[axis] - joint.minAngle[axis]);
       }
     }
     a.root.p = Vec3(0.0f, 0.0f, 0.4f);
-    a.root.q = Quat(Eigen::AngleAxisf(6.0f * unit(rng), Vec3(unit(rng), unit(rng), unit(rng)).normalized()));
+    a.root.q = Quat(
+        Eigen::AngleAxisf(6.0f * unit(rng), Vec3(unit(rng), unit(rng), unit(rng)).normalized()));
     out.push_back(a);
   }
   return out;
@@ -83,7 +85,8 @@ BENCHMARK(BM_OpenXr26);
 // One complete fit from 21 keypoints (rigid start + Levenberg-Marquardt), per random pose.
 void BM_FitToKeypoints(benchmark::State& state) {
   std::vector<std::array<Vec3, 21>> targets;
-  for (const auto& a : randomPoses(32)) targets.push_back(keypoints21(hand(), forwardKinematics(hand(), a)));
+  for (const auto& a : randomPoses(32))
+    targets.push_back(keypoints21(hand(), forwardKinematics(hand(), a)));
   KeypointFitter fitter(hand());
   size_t i = 0;
   float worst = 0.0f;

@@ -43,7 +43,7 @@ struct BodySpec {
 };
 
 struct JointSpec {
-  std::string parent;            // body names
+  std::string parent;  // body names
   std::string child;
   Vec3 anchorParent = Vec3::Zero();  // joint centre in the parent's body frame, m
   Vec3 anchorChild = Vec3::Zero();   // joint centre in the child's body frame, m
@@ -131,7 +131,9 @@ class ArticulatedModel {
   int bodyIndex(const std::string& name) const;
   int keypointIndex(const std::string& name) const;
   // Whether bodies a and b may collide (the collision filter).
-  bool collides(int a, int b) const { return collides_[static_cast<size_t>(a * bodyCount() + b)] != 0; }
+  bool collides(int a, int b) const {
+    return collides_[static_cast<size_t>(a * bodyCount() + b)] != 0;
+  }
   // Whether `ancestor` is `body` or on its path to the root.
   bool isAncestorOrSelf(int ancestor, int body) const {
     return ancestorOrSelf_[static_cast<size_t>(body * bodyCount() + ancestor)] != 0;
@@ -140,7 +142,9 @@ class ArticulatedModel {
   // Hand layouts: present when the model names all 21 MediaPipe keypoints (docs/model.md);
   // the OpenXR frames additionally need palm_center and the four finger *_cmc keypoints.
   bool hasKeypoints21() const { return hasKeypoints21_; }
-  const std::array<int, 21>& keypoints21Indices() const { return keypoints21_; }  // into keypoints()
+  const std::array<int, 21>& keypoints21Indices() const {
+    return keypoints21_;
+  }  // into keypoints()
   bool hasOpenXrJoints() const { return hasOpenXr_; }
   const std::array<BodyFrame, 26>& openXrFrames() const { return openXr_; }
 

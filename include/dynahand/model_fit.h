@@ -14,20 +14,20 @@
 namespace dynahand::model {
 
 struct FitOptions {
-  bool fitScale = false;           // also estimate a uniform scale of the model
-  float minScale = 0.5f;           // scale bounds when fitScale
+  bool fitScale = false;  // also estimate a uniform scale of the model
+  float minScale = 0.5f;  // scale bounds when fitScale
   float maxScale = 2.0f;
-  int maxIterations = 60;          // Levenberg-Marquardt iterations per start
-  float meanErrorGoal = 1e-5f;     // m; stop once the mean keypoint error is below this
+  int maxIterations = 60;                // Levenberg-Marquardt iterations per start
+  float meanErrorGoal = 1e-5f;           // m; stop once the mean keypoint error is below this
   const JointAngles* initial = nullptr;  // start here (and skip the rigid alignment); not owned
 };
 
 struct FitResult {
-  JointAngles angles;       // for scaleModel(model, scale): same root, same angles
+  JointAngles angles;  // for scaleModel(model, scale): same root, same angles
   float scale = 1.0f;
-  float meanError = 0.0f;   // mean keypoint distance after the fit, m
-  float maxError = 0.0f;    // largest keypoint distance, m
-  int iterations = 0;       // total over all starts
+  float meanError = 0.0f;  // mean keypoint distance after the fit, m
+  float maxError = 0.0f;   // largest keypoint distance, m
+  int iterations = 0;      // total over all starts
 };
 
 // Reusable fitter: buffers are sized once per model, so repeated fits do not reallocate.
@@ -47,12 +47,12 @@ class KeypointFitter {
     int joint;  // -1: root / scale
     int axis;
   };
-  float run(std::span<const int> keypoints, std::span<const Vec3> targets, const FitOptions& options,
-            JointAngles& angles, float& scale, int& iterations);
-  float evaluate(std::span<const int> keypoints, std::span<const Vec3> targets, const JointAngles& angles, float scale,
-                 std::vector<Vec3>& positions);
-  bool rigidStart(std::span<const int> keypoints, std::span<const Vec3> targets, bool fitScale, JointAngles& angles,
-                  float& scale);
+  float run(std::span<const int> keypoints, std::span<const Vec3> targets,
+            const FitOptions& options, JointAngles& angles, float& scale, int& iterations);
+  float evaluate(std::span<const int> keypoints, std::span<const Vec3> targets,
+                 const JointAngles& angles, float scale, std::vector<Vec3>& positions);
+  bool rigidStart(std::span<const int> keypoints, std::span<const Vec3> targets, bool fitScale,
+                  JointAngles& angles, float& scale);
 
   const ArticulatedModel* model_;
   std::vector<Param> params_;  // free joint axes (min < max)
@@ -61,7 +61,8 @@ class KeypointFitter {
   JointAngles trial_;
 };
 
-Result<FitResult> fitToKeypoints(const ArticulatedModel& model, const std::array<Vec3, 21>& keypoints,
+Result<FitResult> fitToKeypoints(const ArticulatedModel& model,
+                                 const std::array<Vec3, 21>& keypoints,
                                  const FitOptions& options = {});
 
 }  // namespace dynahand::model

@@ -23,16 +23,19 @@ struct IntelModel {
   ModelPose restPose;      // the file's "pose", body frames
 };
 
-Result<IntelModel> importIntelModel(const std::filesystem::path& path, const IntelImportOptions& options = {});
+Result<IntelModel> importIntelModel(const std::filesystem::path& path,
+                                    const IntelImportOptions& options = {});
 
 // .pose: one frame per line, per body px py pz qx qy qz qw of the body's centre-of-mass
 // frame (m, camera frame). Converted to and from body frames with the model's hull centroids.
-Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model);
+Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path,
+                                              const ArticulatedModel& model);
 Status saveIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model,
                       std::span<const ModelPose> poses);
 
 // One .pose line's numbers (7 per body) <-> body-frame poses.
-Result<ModelPose> intelPoseFromNumbers(std::span<const float> numbers, const ArticulatedModel& model);
+Result<ModelPose> intelPoseFromNumbers(std::span<const float> numbers,
+                                       const ArticulatedModel& model);
 std::vector<float> intelPoseToNumbers(const ModelPose& pose, const ArticulatedModel& model);
 
 // Catmull-Clark subdivision of a closed polygon mesh (used on the control cages); returns the

@@ -11,10 +11,10 @@
 namespace dynahand::model {
 
 struct WorldBuildOptions {
-  bool limitsEnabled = true;           // the joints' angle limits
-  bool staticRoot = false;             // the root body never moves (e.g. a robot base)
-  float linearDamping = 0.0f;          // 1/s, every dynamic body
-  float angularDamping = 0.0f;         // 1/s
+  bool limitsEnabled = true;    // the joints' angle limits
+  bool staticRoot = false;      // the root body never moves (e.g. a robot base)
+  float linearDamping = 0.0f;   // 1/s, every dynamic body
+  float angularDamping = 0.0f;  // 1/s
 };
 
 // Ids of the model's bodies and joints in the world (indexed like model.bodies() / joints()).
@@ -35,7 +35,11 @@ void readPose(const physics::World& world, const ModelInWorld& ids, ModelPose& o
 // frameParent = F * kModelToPhysics, frameChild = kModelToPhysics (physics X, Y, Z = model
 // z, -y, x), and model angles (f, a, t) are physics angles (f, -a, t).
 Quat modelToPhysicsFrame();
-inline Vec3 toPhysicsAngles(const Vec3& modelAngles) { return {modelAngles.x(), -modelAngles.y(), modelAngles.z()}; }
-inline Vec3 fromPhysicsAngles(const Vec3& physicsAngles) { return {physicsAngles.x(), -physicsAngles.y(), physicsAngles.z()}; }
+inline Vec3 toPhysicsAngles(const Vec3& modelAngles) {
+  return {modelAngles.x(), -modelAngles.y(), modelAngles.z()};
+}
+inline Vec3 fromPhysicsAngles(const Vec3& physicsAngles) {
+  return {physicsAngles.x(), -physicsAngles.y(), physicsAngles.z()};
+}
 
 }  // namespace dynahand::model

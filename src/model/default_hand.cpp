@@ -5,8 +5,9 @@
 // are fractions of W. Body frames: origin at the joint with the parent, +z distal along the
 // bone, +y dorsal (out of the back of the hand), +x radial (toward the thumb) for a right
 // hand. Joint angles (model_pose.h): flexion about +x bends toward the palm, abduction is
-// positive toward +x (the thumb side of a right hand), twist is about the bone. Finger bones are convex hulls of two spheres (tapered capsules) centred on their
-// joints, so neighbours share a ball around every joint and never show a gap.
+// positive toward +x (the thumb side of a right hand), twist is about the bone. Finger bones are
+// convex hulls of two spheres (tapered capsules) centred on their joints, so neighbours share a
+// ball around every joint and never show a gap.
 #include <array>
 #include <cassert>
 #include <cmath>
@@ -22,10 +23,13 @@ constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
 constexpr float kPi = std::numbers::pi_v<float>;
 
 // Sample coordinates below 0.1 um are rounding residue of cos(pi / 2): written as 0.
-Vec3 snap(const Vec3& v) { return v.unaryExpr([](float c) { return std::abs(c) < 1e-7f ? 0.0f : c; }); }
+Vec3 snap(const Vec3& v) {
+  return v.unaryExpr([](float c) { return std::abs(c) < 1e-7f ? 0.0f : c; });
+}
 
 // Points on an axis-aligned ellipsoid: poles plus `rings` latitude rings of `segments`.
-void addEllipsoid(std::vector<Vec3>& out, const Vec3& centre, const Vec3& radii, int rings, int segments) {
+void addEllipsoid(std::vector<Vec3>& out, const Vec3& centre, const Vec3& radii, int rings,
+                  int segments) {
   out.push_back(centre + Vec3(0, 0, radii.z()));
   out.push_back(centre - Vec3(0, 0, radii.z()));
   for (int r = 0; r < rings; ++r) {
@@ -35,16 +39,19 @@ void addEllipsoid(std::vector<Vec3>& out, const Vec3& centre, const Vec3& radii,
     for (int s = 0; s < segments; ++s) {
       const float lon = phase + 2 * kPi * static_cast<float>(s) / static_cast<float>(segments);
       out.push_back(snap(centre + Vec3(radii.x() * std::cos(lat) * std::cos(lon),
-                                       radii.y() * std::cos(lat) * std::sin(lon), radii.z() * std::sin(lat))));
+                                       radii.y() * std::cos(lat) * std::sin(lon),
+                                       radii.z() * std::sin(lat))));
     }
   }
 }
 
 // An elliptical ring in a plane z = const.
-void addRing(std::vector<Vec3>& out, const Vec3& centre, float halfWidth, float halfThickness, int segments) {
+void addRing(std::vector<Vec3>& out, const Vec3& centre, float halfWidth, float halfThickness,
+             int segments) {
   for (int s = 0; s < segments; ++s) {
     const float lon = 2 * kPi * static_cast<float>(s) / static_cast<float>(segments);
-    out.push_back(snap(centre + Vec3(halfWidth * std::cos(lon), halfThickness * std::sin(lon), 0.0f)));
+    out.push_back(
+        snap(centre + Vec3(halfWidth * std::cos(lon), halfThickness * std::sin(lon), 0.0f)));
   }
 }
 
@@ -56,7 +63,9 @@ std::vector<Vec3> capsule(float r0, float r1, float length) {
   return points;
 }
 
-Vec3 degrees(float x, float y, float z) { return Vec3(x, y, z) * kDeg; }
+Vec3 degrees(float x, float y, float z) {
+  return Vec3(x, y, z) * kDeg;
+}
 
 struct FingerShape {
   const char* name;
@@ -103,11 +112,13 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   auto addBody = [&](const std::string& name, std::vector<Vec3> points) {
     spec.bodies.push_back(BodySpec{name, std::move(points), std::nullopt, std::nullopt});
   };
-  auto addJoint = [&](const std::string& parent, const std::string& child, const Vec3& anchor, const Quat& frame,
-                      const Vec3& minAngle, const Vec3& maxAngle) {
-    spec.joints.push_back(JointSpec{parent, child, anchor, Vec3::Zero(), frame, minAngle, maxAngle});
+  auto addJoint = [&](const std::string& parent, const std::string& child, const Vec3& anchor,
+                      const Quat& frame, const Vec3& minAngle, const Vec3& maxAngle) {
+    spec.joints.push_back(
+        JointSpec{parent, child, anchor, Vec3::Zero(), frame, minAngle, maxAngle});
   };
-  auto addKeypoint = [&](const std::string& name, const std::string& body, const Vec3& point, float radius) {
+  auto addKeypoint = [&](const std::string& name, const std::string& body, const Vec3& point,
+                         float radius) {
     spec.keypoints.push_back(KeypointSpec{name, body, point, radius});
   };
 
@@ -123,7 +134,8 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
 
   // 1 palm: wrist section, mid-palm section and a flattened ball around each knuckle.
   std::array<Vec3, 4> mcp;
-  for (size_t f = 0; f < 4; ++f) mcp[f] = Vec3(kFingers[f].mcpX * W, kFingers[f].mcpY * W, kFingers[f].mcpZ * L);
+  for (size_t f = 0; f < 4; ++f)
+    mcp[f] = Vec3(kFingers[f].mcpX * W, kFingers[f].mcpY * W, kFingers[f].mcpZ * L);
   {
     std::vector<Vec3> points;
     addRing(points, Vec3(0, 0, -0.1f * W), 0.26f * W, 0.13f * W, 16);  // heel of the palm
@@ -135,11 +147,13 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
     }
     addBody("palm", std::move(points));
   }
-  addJoint("forearm", "palm", Vec3::Zero(), Quat::Identity(), degrees(-70, -35, 0), degrees(80, 20, 0));
+  addJoint("forearm", "palm", Vec3::Zero(), Quat::Identity(), degrees(-70, -35, 0),
+           degrees(80, 20, 0));
 
   // Wrist and palm keypoints (MediaPipe wrist = the wrist joint centre).
   addKeypoint("wrist", "palm", Vec3::Zero(), 0.19f * W);
-  addKeypoint("palm_center", "palm", Vec3(0.5f * mcp[1].x(), -0.01f * W, 0.5f * mcp[1].z()), 0.18f * W);
+  addKeypoint("palm_center", "palm", Vec3(0.5f * mcp[1].x(), -0.01f * W, 0.5f * mcp[1].z()),
+              0.18f * W);
 
   // 2-4 thumb. The carpometacarpal joint sits radial and volar near the wrist; at rest the
   // thumb points distally, radially and slightly volar, its nail turned toward the radial
@@ -165,8 +179,10 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
     }
     addKeypoint(keys[3], names[2], Vec3(0, 0, lengths[2]), radii[3]);
     addJoint("palm", names[0], cmc, restFrame, degrees(-20, -30, -20), degrees(55, 40, 30));
-    addJoint(names[0], names[1], Vec3(0, 0, lengths[0]), Quat::Identity(), degrees(-10, -10, -5), degrees(60, 15, 5));
-    addJoint(names[1], names[2], Vec3(0, 0, lengths[1]), Quat::Identity(), degrees(-15, 0, 0), degrees(85, 0, 0));
+    addJoint(names[0], names[1], Vec3(0, 0, lengths[0]), Quat::Identity(), degrees(-10, -10, -5),
+             degrees(60, 15, 5));
+    addJoint(names[1], names[2], Vec3(0, 0, lengths[1]), Quat::Identity(), degrees(-15, 0, 0),
+             degrees(85, 0, 0));
   }
 
   // 5-16 fingers: proximal, middle, distal phalanx each.
@@ -183,15 +199,16 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
     }
     addKeypoint(n + "_tip", n + "_distal", Vec3(0, 0, finger.lengths[2] * L), kTaper[3] * base);
     // Metacarpal bases converge toward the wrist (OpenXR metacarpal joints).
-    addKeypoint(n + "_cmc", "palm", Vec3(0.6f * mcp[f].x(), mcp[f].y(), 0.2f * mcp[f].z()), 0.8f * base);
+    addKeypoint(n + "_cmc", "palm", Vec3(0.6f * mcp[f].x(), mcp[f].y(), 0.2f * mcp[f].z()),
+                0.8f * base);
 
     const Quat splay(Eigen::AngleAxisf(finger.splayDeg * kDeg, Vec3::UnitY()));
     addJoint("palm", n + "_proximal", mcp[f], splay, degrees(-25, finger.minAbductionDeg, -5),
              degrees(95, finger.maxAbductionDeg, 5));
-    addJoint(n + "_proximal", n + "_middle", Vec3(0, 0, finger.lengths[0] * L), Quat::Identity(), degrees(-5, 0, 0),
-             degrees(110, 0, 0));
-    addJoint(n + "_middle", n + "_distal", Vec3(0, 0, finger.lengths[1] * L), Quat::Identity(), degrees(-10, 0, 0),
-             degrees(85, 0, 0));
+    addJoint(n + "_proximal", n + "_middle", Vec3(0, 0, finger.lengths[0] * L), Quat::Identity(),
+             degrees(-5, 0, 0), degrees(110, 0, 0));
+    addJoint(n + "_middle", n + "_distal", Vec3(0, 0, finger.lengths[1] * L), Quat::Identity(),
+             degrees(-10, 0, 0), degrees(85, 0, 0));
   }
 
   // Joint order must match the body order (joint j has child j + 1): thumb joints were added

@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
-#include <fmt/format.h>
 
 #include "dynahand/model_fit.h"
 
@@ -39,7 +39,8 @@ KeypointFitter::KeypointFitter(const ArticulatedModel& model) : model_(&model) {
 }
 
 float KeypointFitter::evaluate(std::span<const int> keypoints, std::span<const Vec3> targets,
-                               const JointAngles& angles, float scale, std::vector<Vec3>& positions) {
+                               const JointAngles& angles, float scale,
+                               std::vector<Vec3>& positions) {
   forwardKinematicsInto(*model_, angles, pose_);
   positions.resize(keypoints.size());
   float cost = 0.0f;
@@ -52,20 +53,22 @@ float KeypointFitter::evaluate(std::span<const int> keypoints, std::span<const V
   return cost;
 }
 
-bool KeypointFitter::rigidStart(std::span<const int> keypoints, std::span<const Vec3> targets, bool fitScale,
-                                JointAngles& angles, float& scale) {
+bool KeypointFitter::rigidStart(std::span<const int> keypoints, std::span<const Vec3> targets,
+                                bool fitScale, JointAngles& angles, float& scale) {
   const ArticulatedModel& model = *model_;
   // Keypoints rigid with body b: on b, or at the centre of the joint from b to a child.
   auto rigidWith = [&](const Keypoint& kp, int b) {
     if (kp.body == b) return true;
     const Body& body = model.bodies()[static_cast<size_t>(kp.body)];
-    return body.parent == b && (kp.point - model.joints()[static_cast<size_t>(body.joint)].anchorChild).norm() < 1e-7f;
+    return body.parent == b &&
+           (kp.point - model.joints()[static_cast<size_t>(body.joint)].anchorChild).norm() < 1e-7f;
   };
   int best = -1;
   int bestCount = 0;
   for (int b = 0; b < model.bodyCount(); ++b) {
     int count = 0;
-    for (const int k : keypoints) count += rigidWith(model.keypoints()[static_cast<size_t>(k)], b) ? 1 : 0;
+    for (const int k : keypoints)
+      count += rigidWith(model.keypoints()[static_cast<size_t>(k)], b) ? 1 : 0;
     if (count > bestCount) {
       best = b;
       bestCount = count;
@@ -93,8 +96,9 @@ bool KeypointFitter::rigidStart(std::span<const int> keypoints, std::span<const 
   return true;
 }
 
-float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> targets, const FitOptions& options,
-                          JointAngles& angles, float& scale, int& iterations) {
+float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> targets,
+                          const FitOptions& options, JointAngles& angles, float& scale,
+                          int& iterations) {
   const ArticulatedModel& model = *model_;
   const int rows = static_cast<int>(keypoints.size()) * 3;
   const int jointParams = static_cast<int>(params_.size());
@@ -107,7 +111,8 @@ float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> 
   std::vector<Vec3> axes(static_cast<size_t>(jointParams));
   std::vector<Vec3> centres(static_cast<size_t>(jointParams));
 
-  const float goal = options.meanErrorGoal * options.meanErrorGoal * static_cast<float>(keypoints.size());
+  const float goal =
+      options.meanErrorGoal * options.meanErrorGoal * static_cast<float>(keypoints.size());
   float cost = evaluate(keypoints, targets, angles, scale, positions_);
   double lambda = 1e-3;
   for (int it = 0; it < options.maxIterations && cost > goal; ++it) {
@@ -127,8 +132,10 @@ float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> 
       Quat delta = jointRotation(plus) * jointRotation(minus).conjugate();
       if (delta.w() < 0.0f) delta.coeffs() = -delta.coeffs();
       const Vec3 rateLocal = delta.vec() / h;  // rotation vector 2 * vec over the step 2h
-      axes[static_cast<size_t>(k)] = pose_.bodies[static_cast<size_t>(joint.parent)].q * (joint.frame * rateLocal);
-      const Vec3 centre = pose_.bodies[static_cast<size_t>(joint.child)].transform(joint.anchorChild);
+      axes[static_cast<size_t>(k)] =
+          pose_.bodies[static_cast<size_t>(joint.parent)].q * (joint.frame * rateLocal);
+      const Vec3 centre =
+          pose_.bodies[static_cast<size_t>(joint.child)].transform(joint.anchorChild);
       centres[static_cast<size_t>(k)] = angles.root.p + scale * (centre - angles.root.p);
     }
     jac.setZero();
@@ -141,7 +148,8 @@ float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> 
       jac.block<3, 3>(row, 3) = (-skew(fromRoot)).cast<double>();
       const int body = model.keypoints()[static_cast<size_t>(keypoints[i])].body;
       for (int k = 0; k < jointParams; ++k) {
-        const Joint& joint = model.joints()[static_cast<size_t>(params_[static_cast<size_t>(k)].joint)];
+        const Joint& joint =
+            model.joints()[static_cast<size_t>(params_[static_cast<size_t>(k)].joint)];
         if (!model.isAncestorOrSelf(joint.child, body)) continue;
         jac.block<3, 1>(row, 6 + k) =
             axes[static_cast<size_t>(k)].cross(p - centres[static_cast<size_t>(k)]).cast<double>();
@@ -161,12 +169,14 @@ float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> 
       trial_.angles = angles.angles;
       for (int k = 0; k < jointParams; ++k) {
         const Param& param = params_[static_cast<size_t>(k)];
-        trial_.angles[static_cast<size_t>(param.joint)][param.axis] += static_cast<float>(step(6 + k));
+        trial_.angles[static_cast<size_t>(param.joint)][param.axis] +=
+            static_cast<float>(step(6 + k));
       }
       clampToLimits(model, trial_);
       float trialScale = scale;
       if (options.fitScale) {
-        trialScale = std::clamp(scale + static_cast<float>(step(n - 1)), options.minScale, options.maxScale);
+        trialScale =
+            std::clamp(scale + static_cast<float>(step(n - 1)), options.minScale, options.maxScale);
       }
       const float trialCost = evaluate(keypoints, targets, trial_, trialScale, trialPositions_);
       if (trialCost < cost) {
@@ -185,22 +195,27 @@ float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> 
       }
     }
     if (!improved) break;
-    forwardKinematicsInto(model, angles, pose_);  // positions_ already match; pose_ for the next Jacobian
+    forwardKinematicsInto(model, angles,
+                          pose_);  // positions_ already match; pose_ for the next Jacobian
   }
   return cost;
 }
 
-Result<FitResult> KeypointFitter::fit(std::span<const int> keypointIndices, std::span<const Vec3> targets,
-                                      const FitOptions& options) {
+Result<FitResult> KeypointFitter::fit(std::span<const int> keypointIndices,
+                                      std::span<const Vec3> targets, const FitOptions& options) {
   const ArticulatedModel& model = *model_;
   if (keypointIndices.size() != targets.size()) {
-    return Error{fmt::format("fitToKeypoints: {} keypoint indices for {} targets", keypointIndices.size(), targets.size())};
+    return Error{fmt::format("fitToKeypoints: {} keypoint indices for {} targets",
+                             keypointIndices.size(), targets.size())};
   }
   if (targets.size() < 3) return Error{"fitToKeypoints: at least 3 target keypoints are needed"};
   for (size_t i = 0; i < targets.size(); ++i) {
-    if (!targets[i].allFinite()) return Error{fmt::format("fitToKeypoints: target {} is not finite", i)};
-    if (keypointIndices[i] < 0 || keypointIndices[i] >= static_cast<int>(model.keypoints().size())) {
-      return Error{fmt::format("fitToKeypoints: keypoint index {} out of range", keypointIndices[i])};
+    if (!targets[i].allFinite())
+      return Error{fmt::format("fitToKeypoints: target {} is not finite", i)};
+    if (keypointIndices[i] < 0 ||
+        keypointIndices[i] >= static_cast<int>(model.keypoints().size())) {
+      return Error{
+          fmt::format("fitToKeypoints: keypoint index {} out of range", keypointIndices[i])};
     }
   }
 
@@ -221,7 +236,8 @@ Result<FitResult> KeypointFitter::fit(std::span<const int> keypointIndices, std:
         return Error{"fitToKeypoints: fewer than 3 target keypoints are fixed to a single body"};
       }
     } else {
-      if (angles.angles.size() != model.joints().size()) return Error{"fitToKeypoints: initial angles do not match the model"};
+      if (angles.angles.size() != model.joints().size())
+        return Error{"fitToKeypoints: initial angles do not match the model"};
       clampToLimits(model, angles);
     }
     int iterations = 0;
@@ -248,13 +264,15 @@ Result<FitResult> KeypointFitter::fit(std::span<const int> keypointIndices, std:
   return best;
 }
 
-Result<FitResult> KeypointFitter::fit21(const std::array<Vec3, 21>& targets, const FitOptions& options) {
-  if (!model_->hasKeypoints21()) return Error{"fitToKeypoints: the model does not name the 21 hand keypoints"};
+Result<FitResult> KeypointFitter::fit21(const std::array<Vec3, 21>& targets,
+                                        const FitOptions& options) {
+  if (!model_->hasKeypoints21())
+    return Error{"fitToKeypoints: the model does not name the 21 hand keypoints"};
   return fit(model_->keypoints21Indices(), targets, options);
 }
 
-Result<FitResult> fitToKeypoints(const ArticulatedModel& model, const std::array<Vec3, 21>& keypoints,
-                                 const FitOptions& options) {
+Result<FitResult> fitToKeypoints(const ArticulatedModel& model,
+                                 const std::array<Vec3, 21>& keypoints, const FitOptions& options) {
   KeypointFitter fitter(model);
   return fitter.fit21(keypoints, options);
 }

@@ -10,7 +10,8 @@
 namespace dynahand::model::detail {
 
 // Sets has21 and the indices into keypoints of the 21 MediaPipe names when all are present.
-void resolveHandLayout(const std::vector<Keypoint>& keypoints, bool& has21, std::array<int, 21>& indices21);
+void resolveHandLayout(const std::vector<Keypoint>& keypoints, bool& has21,
+                       std::array<int, 21>& indices21);
 
 // The 26 OpenXR joints as frames fixed on bodies, from the keypoints in the model's zero
 // pose. False when palm_center or a finger *_cmc keypoint is missing.

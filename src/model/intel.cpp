@@ -17,30 +17,34 @@
 namespace dynahand::model {
 namespace {
 
-using nlohmann::json;
 using detail::FormatError;
+using nlohmann::json;
 
 constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
 
 const char* const kHandBodyNames[17] = {
-    "forearm",         "palm",          "thumb_metacarpal", "thumb_proximal",  "thumb_distal",  "index_proximal",
-    "index_middle",    "index_distal",  "middle_proximal",  "middle_middle",   "middle_distal", "ring_proximal",
-    "ring_middle",     "ring_distal",   "pinky_proximal",   "pinky_middle",    "pinky_distal"};
+    "forearm",        "palm",          "thumb_metacarpal", "thumb_proximal",  "thumb_distal",
+    "index_proximal", "index_middle",  "index_distal",     "middle_proximal", "middle_middle",
+    "middle_distal",  "ring_proximal", "ring_middle",      "ring_distal",     "pinky_proximal",
+    "pinky_middle",   "pinky_distal"};
 
 int index(const json& v, const std::string& path, size_t count) {
   if (!v.is_number_integer()) throw FormatError{path, "expected an integer"};
   const long long i = v.get<long long>();
-  if (i < 0 || i >= static_cast<long long>(count)) throw FormatError{path, fmt::format("index {} out of range [0, {})", i, count)};
+  if (i < 0 || i >= static_cast<long long>(count))
+    throw FormatError{path, fmt::format("index {} out of range [0, {})", i, count)};
   return static_cast<int>(i);
 }
 
-Vec3 degreesToRadians(const Vec3& d) { return (d.cast<double>() / kDegPerRad).cast<float>(); }
+Vec3 degreesToRadians(const Vec3& d) {
+  return (d.cast<double>() / kDegPerRad).cast<float>();
+}
 
 // Quaternion stored x, y, z, w.
 Quat quatXyzw(const json& v, const std::string& path) {
   if (!v.is_array() || v.size() != 4) throw FormatError{path, "expected [x, y, z, w]"};
-  return Quat(detail::number(v[3], path + "[3]"), detail::number(v[0], path + "[0]"), detail::number(v[1], path + "[1]"),
-              detail::number(v[2], path + "[2]"));
+  return Quat(detail::number(v[3], path + "[3]"), detail::number(v[0], path + "[0]"),
+              detail::number(v[1], path + "[1]"), detail::number(v[2], path + "[2]"));
 }
 
 struct ParsedIntel {
@@ -61,17 +65,20 @@ ParsedIntel parseIntel(const json& doc, const IntelImportOptions& options) {
     const json& cage = objectAt(cages[b], path);
     PolygonMesh mesh;
     const json& verts = arrayAt(field(cage, path, "verts"), path + ".verts");
-    for (size_t v = 0; v < verts.size(); ++v) mesh.vertices.push_back(vec3(verts[v], fmt::format("{}.verts[{}]", path, v)));
+    for (size_t v = 0; v < verts.size(); ++v)
+      mesh.vertices.push_back(vec3(verts[v], fmt::format("{}.verts[{}]", path, v)));
     const json& faces = arrayAt(field(cage, path, "faces"), path + ".faces");
     for (size_t f = 0; f < faces.size(); ++f) {
       const std::string facePath = fmt::format("{}.faces[{}]", path, f);
       const json& face = arrayAt(faces[f], facePath);
       if (face.size() < 3) throw FormatError{facePath, "a face needs at least 3 vertices"};
       std::vector<int> indices;
-      for (size_t i = 0; i < face.size(); ++i) indices.push_back(index(face[i], fmt::format("{}[{}]", facePath, i), mesh.vertices.size()));
+      for (size_t i = 0; i < face.size(); ++i)
+        indices.push_back(index(face[i], fmt::format("{}[{}]", facePath, i), mesh.vertices.size()));
       mesh.faces.push_back(std::move(indices));
     }
-    for (int level = 0; level < options.subdivisions && !mesh.faces.empty(); ++level) mesh = catmullClark(mesh);
+    for (int level = 0; level < options.subdivisions && !mesh.faces.empty(); ++level)
+      mesh = catmullClark(mesh);
     const std::string name = n == 17 ? kHandBodyNames[b] : fmt::format("bone{}", b);
     spec.bodies.push_back(BodySpec{name, std::move(mesh.vertices), std::nullopt, std::nullopt});
   }
@@ -80,8 +87,10 @@ ParsedIntel parseIntel(const json& doc, const IntelImportOptions& options) {
     const std::string path = fmt::format("joints[{}]", j);
     const json& o = objectAt(joints[j], path);
     JointSpec joint;
-    joint.parent = spec.bodies[static_cast<size_t>(index(field(o, path, "rbi0"), path + ".rbi0", n))].name;
-    joint.child = spec.bodies[static_cast<size_t>(index(field(o, path, "rbi1"), path + ".rbi1", n))].name;
+    joint.parent =
+        spec.bodies[static_cast<size_t>(index(field(o, path, "rbi0"), path + ".rbi0", n))].name;
+    joint.child =
+        spec.bodies[static_cast<size_t>(index(field(o, path, "rbi1"), path + ".rbi1", n))].name;
     joint.anchorParent = vec3(field(o, path, "p0"), path + ".p0");
     joint.anchorChild = vec3(field(o, path, "p1"), path + ".p1");
     joint.frame = quatXyzw(field(o, path, "jointframe"), path + ".jointframe");
@@ -90,12 +99,14 @@ ParsedIntel parseIntel(const json& doc, const IntelImportOptions& options) {
     spec.joints.push_back(std::move(joint));
   }
   const json& pose = arrayAt(field(doc, "", "pose"), "pose");
-  if (pose.size() != n) throw FormatError{"pose", fmt::format("{} poses for {} bodies", pose.size(), n)};
+  if (pose.size() != n)
+    throw FormatError{"pose", fmt::format("{} poses for {} bodies", pose.size(), n)};
   for (size_t b = 0; b < n; ++b) {
     const std::string path = fmt::format("pose[{}]", b);
     const json& p = arrayAt(pose[b], path);
     if (p.size() != 7) throw FormatError{path, "expected [px, py, pz, qx, qy, qz, qw]"};
-    for (size_t k = 0; k < 7; ++k) parsed.restNumbers.push_back(number(p[k], fmt::format("{}[{}]", path, k)));
+    for (size_t k = 0; k < 7; ++k)
+      parsed.restNumbers.push_back(number(p[k], fmt::format("{}[{}]", path, k)));
   }
   spec.metadata.name = "hand_tracking_samples model_hand.json";
   spec.metadata.handedness = n == 17 ? Handedness::Right : Handedness::None;
@@ -110,7 +121,8 @@ void addHandKeypoints(ModelSpec& spec, const ArticulatedModel& model) {
     return std::max(0.0f, -model.bodies()[static_cast<size_t>(body)].shape.signedDistance(p));
   };
   auto add = [&](const std::string& name, int body, const Vec3& p, float radius) {
-    spec.keypoints.push_back(KeypointSpec{name, model.bodies()[static_cast<size_t>(body)].name, p, radius});
+    spec.keypoints.push_back(
+        KeypointSpec{name, model.bodies()[static_cast<size_t>(body)].name, p, radius});
   };
   auto tip = [&](int body) {
     const physics::ConvexShape& shape = model.bodies()[static_cast<size_t>(body)].shape;
@@ -120,16 +132,21 @@ void addHandKeypoints(ModelSpec& spec, const ArticulatedModel& model) {
     const std::optional<float> t = shape.raycast(origin, Vec3(0, 0, -1), 1.0f);
     return t ? Vec3(origin + Vec3(0, 0, -*t)) : Vec3(c.x(), c.y(), top);
   };
-  const float wristRadius = std::max(depth(1, Vec3::Zero()), depth(0, model.joints()[0].anchorParent));
+  const float wristRadius =
+      std::max(depth(1, Vec3::Zero()), depth(0, model.joints()[0].anchorParent));
   add("wrist", 1, Vec3::Zero(), wristRadius);
-  add("palm_center", 1, model.bodies()[1].shape.centroid(), model.bodies()[1].shape.inscribedRadius());
+  add("palm_center", 1, model.bodies()[1].shape.centroid(),
+      model.bodies()[1].shape.inscribedRadius());
   const char* digits[5] = {"thumb", "index", "middle", "ring", "pinky"};
   const char* jointNames[2][3] = {{"cmc", "mcp", "ip"}, {"mcp", "pip", "dip"}};
   for (int d = 0; d < 5; ++d) {
     const int first = 2 + 3 * d;
     const auto& names = jointNames[d == 0 ? 0 : 1];
-    for (int i = 0; i < 3; ++i) add(fmt::format("{}_{}", digits[d], names[i]), first + i, Vec3::Zero(), depth(first + i, Vec3::Zero()));
-    add(fmt::format("{}_tip", digits[d]), first + 2, tip(first + 2), 0.8f * depth(first + 2, Vec3::Zero()));
+    for (int i = 0; i < 3; ++i)
+      add(fmt::format("{}_{}", digits[d], names[i]), first + i, Vec3::Zero(),
+          depth(first + i, Vec3::Zero()));
+    add(fmt::format("{}_tip", digits[d]), first + 2, tip(first + 2),
+        0.8f * depth(first + 2, Vec3::Zero()));
     if (d > 0) {
       // Metacarpal bases: a fifth of the way from the wrist to the knuckle, in the palm.
       const Vec3 mcp = model.joints()[static_cast<size_t>(first - 1)].anchorParent;
@@ -138,7 +155,8 @@ void addHandKeypoints(ModelSpec& spec, const ArticulatedModel& model) {
   }
 }
 
-bool overlapping(const physics::ConvexShape& a, const Pose& pa, const physics::ConvexShape& b, const Pose& pb) {
+bool overlapping(const physics::ConvexShape& a, const Pose& pa, const physics::ConvexShape& b,
+                 const Pose& pb) {
   for (const Vec3& v : a.vertices()) {
     if (b.signedDistance(pb.inverseTransform(pa.transform(v))) < 0.0f) return true;
   }
@@ -150,7 +168,8 @@ bool overlapping(const physics::ConvexShape& a, const Pose& pa, const physics::C
 
 }  // namespace
 
-Result<ModelPose> intelPoseFromNumbers(std::span<const float> numbers, const ArticulatedModel& model) {
+Result<ModelPose> intelPoseFromNumbers(std::span<const float> numbers,
+                                       const ArticulatedModel& model) {
   const size_t n = model.bodies().size();
   if (numbers.size() != 7 * n) {
     return Error{fmt::format("{} numbers, expected {} ({} bodies x 7)", numbers.size(), 7 * n, n)};
@@ -163,10 +182,12 @@ Result<ModelPose> intelPoseFromNumbers(std::span<const float> numbers, const Art
       if (!std::isfinite(x[k])) return Error{fmt::format("body {}: number {} is not finite", b, k)};
     }
     const Quat q(x[6], x[3], x[4], x[5]);
-    if (std::abs(q.norm() - 1.0f) > 1e-3f) return Error{fmt::format("body {}: orientation is not a unit quaternion", b)};
+    if (std::abs(q.norm() - 1.0f) > 1e-3f)
+      return Error{fmt::format("body {}: orientation is not a unit quaternion", b)};
     pose.bodies[b].q = q.normalized();
     // The file holds the centre-of-mass frame; the body frame origin is at -centroid in it.
-    pose.bodies[b].p = Vec3(x[0], x[1], x[2]) - pose.bodies[b].q * model.bodies()[b].shape.centroid();
+    pose.bodies[b].p =
+        Vec3(x[0], x[1], x[2]) - pose.bodies[b].q * model.bodies()[b].shape.centroid();
   }
   return pose;
 }
@@ -182,7 +203,8 @@ std::vector<float> intelPoseToNumbers(const ModelPose& pose, const ArticulatedMo
   return numbers;
 }
 
-Result<IntelModel> importIntelModel(const std::filesystem::path& path, const IntelImportOptions& options) {
+Result<IntelModel> importIntelModel(const std::filesystem::path& path,
+                                    const IntelImportOptions& options) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{fmt::format("{}: cannot open model file", path.string())};
   std::ostringstream text;
@@ -210,8 +232,10 @@ Result<IntelModel> importIntelModel(const std::filesystem::path& path, const Int
   for (size_t a = 0; a < n; ++a) {
     for (size_t b = a + 1; b < n; ++b) {
       if (!first->collides(static_cast<int>(a), static_cast<int>(b))) continue;
-      if (overlapping(first->bodies()[a].shape, rest->bodies[a], first->bodies()[b].shape, rest->bodies[b])) {
-        parsed.spec.collision.ignoredPairs.emplace_back(first->bodies()[a].name, first->bodies()[b].name);
+      if (overlapping(first->bodies()[a].shape, rest->bodies[a], first->bodies()[b].shape,
+                      rest->bodies[b])) {
+        parsed.spec.collision.ignoredPairs.emplace_back(first->bodies()[a].name,
+                                                        first->bodies()[b].name);
       }
     }
   }
@@ -222,15 +246,16 @@ Result<IntelModel> importIntelModel(const std::filesystem::path& path, const Int
     const auto kp = keypoints21(*model, *rest);
     ModelSpec spec = model->spec();
     // Length of the straightened middle finger chain (the rest pose is slightly flexed).
-    spec.metadata.referenceLength = (kp[9] - kp[0]).norm() + (kp[10] - kp[9]).norm() + (kp[11] - kp[10]).norm() +
-                                    (kp[12] - kp[11]).norm();
+    spec.metadata.referenceLength = (kp[9] - kp[0]).norm() + (kp[10] - kp[9]).norm() +
+                                    (kp[11] - kp[10]).norm() + (kp[12] - kp[11]).norm();
     model = buildModel(spec);
     if (!model) return Error{fmt::format("{}: {}", path.string(), model.message())};
   }
   return IntelModel{std::move(model).value(), std::move(rest).value()};
 }
 
-Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model) {
+Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path,
+                                              const ArticulatedModel& model) {
   std::ifstream in(path);
   if (!in) return Error{fmt::format("{}: cannot open pose file", path.string())};
   std::vector<ModelPose> poses;
@@ -250,7 +275,8 @@ Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path,
       if (result.ec != std::errc()) {
         const char* stop = p;
         while (stop < end && *stop != ' ' && *stop != '\t') ++stop;
-        return Error{fmt::format("{}:{}: '{}' is not a number", path.string(), lineNumber, std::string(p, stop))};
+        return Error{fmt::format("{}:{}: '{}' is not a number", path.string(), lineNumber,
+                                 std::string(p, stop))};
       }
       numbers.push_back(value);
       p = result.ptr;
@@ -264,12 +290,14 @@ Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path,
   return poses;
 }
 
-Status saveIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model, std::span<const ModelPose> poses) {
+Status saveIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model,
+                      std::span<const ModelPose> poses) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) return Error{fmt::format("{}: cannot open for writing", path.string())};
   for (const ModelPose& pose : poses) {
     if (pose.bodies.size() != model.bodies().size()) {
-      return Error{fmt::format("{}: a pose has {} bodies, the model {}", path.string(), pose.bodies.size(), model.bodies().size())};
+      return Error{fmt::format("{}: a pose has {} bodies, the model {}", path.string(),
+                               pose.bodies.size(), model.bodies().size())};
     }
     const std::vector<float> numbers = intelPoseToNumbers(pose, model);
     std::string line;

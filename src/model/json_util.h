@@ -21,7 +21,8 @@ inline std::string childPath(const std::string& path, const char* key) {
   return path.empty() ? std::string(key) : path + "." + key;
 }
 
-inline const nlohmann::json& field(const nlohmann::json& object, const std::string& path, const char* key) {
+inline const nlohmann::json& field(const nlohmann::json& object, const std::string& path,
+                                   const char* key) {
   const auto it = object.find(key);
   if (it == object.end()) throw FormatError{childPath(path, key), "missing"};
   return *it;
@@ -37,7 +38,8 @@ inline const nlohmann::json& arrayAt(const nlohmann::json& v, const std::string&
   return v;
 }
 
-inline void checkKeys(const nlohmann::json& object, const std::string& path, std::initializer_list<const char*> allowed) {
+inline void checkKeys(const nlohmann::json& object, const std::string& path,
+                      std::initializer_list<const char*> allowed) {
   for (auto it = object.begin(); it != object.end(); ++it) {
     bool known = false;
     for (const char* key : allowed) known = known || it.key() == key;

@@ -40,46 +40,47 @@ std::array<XrJointRule, 26> xrRules() {
 
 const std::array<const char*, 21>& keypoint21Names() {
   static const std::array<const char*, 21> names = {
-      "wrist",      "thumb_cmc",  "thumb_mcp",  "thumb_ip",   "thumb_tip", "index_mcp",  "index_pip",
-      "index_dip",  "index_tip",  "middle_mcp", "middle_pip", "middle_dip", "middle_tip", "ring_mcp",
-      "ring_pip",   "ring_dip",   "ring_tip",   "pinky_mcp",  "pinky_pip", "pinky_dip",  "pinky_tip"};
+      "wrist",      "thumb_cmc", "thumb_mcp", "thumb_ip",   "thumb_tip",  "index_mcp",
+      "index_pip",  "index_dip", "index_tip", "middle_mcp", "middle_pip", "middle_dip",
+      "middle_tip", "ring_mcp",  "ring_pip",  "ring_dip",   "ring_tip",   "pinky_mcp",
+      "pinky_pip",  "pinky_dip", "pinky_tip"};
   return names;
 }
 
 const std::array<const char*, 26>& openXrJointNames() {
-  static const std::array<const char*, 26> names = {
-      "palm",
-      "wrist",
-      "thumb_metacarpal",
-      "thumb_proximal",
-      "thumb_distal",
-      "thumb_tip",
-      "index_metacarpal",
-      "index_proximal",
-      "index_intermediate",
-      "index_distal",
-      "index_tip",
-      "middle_metacarpal",
-      "middle_proximal",
-      "middle_intermediate",
-      "middle_distal",
-      "middle_tip",
-      "ring_metacarpal",
-      "ring_proximal",
-      "ring_intermediate",
-      "ring_distal",
-      "ring_tip",
-      "little_metacarpal",
-      "little_proximal",
-      "little_intermediate",
-      "little_distal",
-      "little_tip"};
+  static const std::array<const char*, 26> names = {"palm",
+                                                    "wrist",
+                                                    "thumb_metacarpal",
+                                                    "thumb_proximal",
+                                                    "thumb_distal",
+                                                    "thumb_tip",
+                                                    "index_metacarpal",
+                                                    "index_proximal",
+                                                    "index_intermediate",
+                                                    "index_distal",
+                                                    "index_tip",
+                                                    "middle_metacarpal",
+                                                    "middle_proximal",
+                                                    "middle_intermediate",
+                                                    "middle_distal",
+                                                    "middle_tip",
+                                                    "ring_metacarpal",
+                                                    "ring_proximal",
+                                                    "ring_intermediate",
+                                                    "ring_distal",
+                                                    "ring_tip",
+                                                    "little_metacarpal",
+                                                    "little_proximal",
+                                                    "little_intermediate",
+                                                    "little_distal",
+                                                    "little_tip"};
   return names;
 }
 
 namespace detail {
 
-void resolveHandLayout(const std::vector<Keypoint>& keypoints, bool& has21, std::array<int, 21>& indices21) {
+void resolveHandLayout(const std::vector<Keypoint>& keypoints, bool& has21,
+                       std::array<int, 21>& indices21) {
   has21 = true;
   for (size_t i = 0; i < 21; ++i) {
     indices21[i] = -1;
@@ -121,7 +122,8 @@ bool computeOpenXrFrames(const ArticulatedModel& model, std::array<BodyFrame, 26
 
 }  // namespace detail
 
-void keypointPositionsInto(const ArticulatedModel& model, const ModelPose& pose, std::vector<Vec3>& out) {
+void keypointPositionsInto(const ArticulatedModel& model, const ModelPose& pose,
+                           std::vector<Vec3>& out) {
   assert(pose.bodies.size() == model.bodies().size());
   out.resize(model.keypoints().size());
   for (size_t k = 0; k < out.size(); ++k) {

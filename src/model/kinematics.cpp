@@ -32,7 +32,8 @@ bool withinLimits(const ArticulatedModel& model, const JointAngles& angles, floa
     const Joint& joint = model.joints()[j];
     for (int axis = 0; axis < 3; ++axis) {
       const float a = angles.angles[j][axis];
-      if (!(a >= joint.minAngle[axis] - tolerance && a <= joint.maxAngle[axis] + tolerance)) return false;
+      if (!(a >= joint.minAngle[axis] - tolerance && a <= joint.maxAngle[axis] + tolerance))
+        return false;
     }
   }
   return true;
@@ -63,7 +64,8 @@ Vec3 jointRotationAngles(const Quat& rotation) {
   return {flexion, abduction, angle};
 }
 
-void forwardKinematicsInto(const ArticulatedModel& model, const JointAngles& angles, ModelPose& out) {
+void forwardKinematicsInto(const ArticulatedModel& model, const JointAngles& angles,
+                           ModelPose& out) {
   assert(angles.angles.size() == model.joints().size() && "one angle triple per joint");
   out.bodies.resize(model.bodies().size());
   const auto& bodies = model.bodies();
@@ -77,7 +79,9 @@ void forwardKinematicsInto(const ArticulatedModel& model, const JointAngles& ang
     const Joint& joint = joints[static_cast<size_t>(body.joint)];
     const Pose& parent = out.bodies[static_cast<size_t>(body.parent)];
     Pose& child = out.bodies[static_cast<size_t>(b)];
-    child.q = (parent.q * joint.frame * jointRotation(angles.angles[static_cast<size_t>(body.joint)])).normalized();
+    child.q =
+        (parent.q * joint.frame * jointRotation(angles.angles[static_cast<size_t>(body.joint)]))
+            .normalized();
     child.p = parent.p + parent.q * joint.anchorParent - child.q * joint.anchorChild;
   }
 }
@@ -111,11 +115,13 @@ JointAngles interpolate(const JointAngles& a, const JointAngles& b, float t) {
   JointAngles out;
   out.root = dynahand::interpolate(a.root, b.root, t);
   out.angles.resize(a.angles.size());
-  for (size_t j = 0; j < a.angles.size(); ++j) out.angles[j] = a.angles[j] + (b.angles[j] - a.angles[j]) * t;
+  for (size_t j = 0; j < a.angles.size(); ++j)
+    out.angles[j] = a.angles[j] + (b.angles[j] - a.angles[j]) * t;
   return out;
 }
 
-ModelPose interpolate(const ArticulatedModel& model, const ModelPose& a, const ModelPose& b, float t) {
+ModelPose interpolate(const ArticulatedModel& model, const ModelPose& a, const ModelPose& b,
+                      float t) {
   return forwardKinematics(model, interpolate(jointAngles(model, a), jointAngles(model, b), t));
 }
 

@@ -14,11 +14,17 @@
 namespace dynahand::model {
 namespace {
 
-bool finite(const Vec3& v) { return v.allFinite(); }
+bool finite(const Vec3& v) {
+  return v.allFinite();
+}
 
-Error pathError(const std::string& path, const std::string& problem) { return Error{path + ": " + problem}; }
+Error pathError(const std::string& path, const std::string& problem) {
+  return Error{path + ": " + problem};
+}
 
-std::string vecPath(const std::string& base, int axis) { return fmt::format("{}[{}]", base, axis); }
+std::string vecPath(const std::string& base, int axis) {
+  return fmt::format("{}[{}]", base, axis);
+}
 
 // The file names limits in degrees; messages use the file's names.
 std::optional<Error> checkLimits(const JointSpec& joint, const std::string& path) {
@@ -27,8 +33,10 @@ std::optional<Error> checkLimits(const JointSpec& joint, const std::string& path
   for (int axis = 0; axis < 3; ++axis) {
     const float lo = joint.minAngle[axis];
     const float hi = joint.maxAngle[axis];
-    if (!std::isfinite(lo)) return pathError(vecPath(path + ".minDeg", axis), "not a finite number");
-    if (!std::isfinite(hi)) return pathError(vecPath(path + ".maxDeg", axis), "not a finite number");
+    if (!std::isfinite(lo))
+      return pathError(vecPath(path + ".minDeg", axis), "not a finite number");
+    if (!std::isfinite(hi))
+      return pathError(vecPath(path + ".maxDeg", axis), "not a finite number");
     if (lo > hi) return pathError(vecPath(path + ".minDeg", axis), "greater than maxDeg");
     // The swing is singular at |abduction| = 90 and at flexion = 180 degrees.
     const float bound = axis == 0 ? kPi * (179.0f / 180.0f) : axis == 1 ? kHalfPi - 1e-3f : kPi;
@@ -61,15 +69,17 @@ int ArticulatedModel::keypointIndex(const std::string& name) const {
 ModelSpec ArticulatedModel::spec() const {
   ModelSpec spec;
   spec.metadata = metadata_;
-  for (const Body& body : bodies_) spec.bodies.push_back({body.name, body.vertices, body.mass, std::nullopt});
+  for (const Body& body : bodies_)
+    spec.bodies.push_back({body.name, body.vertices, body.mass, std::nullopt});
   for (const Joint& joint : joints_) {
     spec.joints.push_back({bodies_[static_cast<size_t>(joint.parent)].name,
-                           bodies_[static_cast<size_t>(joint.child)].name, joint.anchorParent, joint.anchorChild,
-                           joint.frame, joint.minAngle, joint.maxAngle});
+                           bodies_[static_cast<size_t>(joint.child)].name, joint.anchorParent,
+                           joint.anchorChild, joint.frame, joint.minAngle, joint.maxAngle});
   }
   spec.collision = collision_;
   for (const Keypoint& kp : keypoints_) {
-    spec.keypoints.push_back({kp.name, bodies_[static_cast<size_t>(kp.body)].name, kp.point, kp.radius});
+    spec.keypoints.push_back(
+        {kp.name, bodies_[static_cast<size_t>(kp.body)].name, kp.point, kp.radius});
   }
   return spec;
 }
@@ -90,19 +100,24 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
     if (b.name.empty()) return pathError(path + ".name", "empty");
     for (int k = 0; k < i; ++k) {
       if (spec.bodies[static_cast<size_t>(k)].name == b.name) {
-        return pathError(path + ".name", fmt::format("duplicate name '{}' (also bodies[{}])", b.name, k));
+        return pathError(path + ".name",
+                         fmt::format("duplicate name '{}' (also bodies[{}])", b.name, k));
       }
     }
     for (size_t v = 0; v < b.vertices.size(); ++v) {
-      if (!finite(b.vertices[v])) return pathError(fmt::format("{}.vertices[{}]", path, v), "not finite");
+      if (!finite(b.vertices[v]))
+        return pathError(fmt::format("{}.vertices[{}]", path, v), "not finite");
     }
     Result<physics::ConvexShape> shape = physics::ConvexShape::fromPoints(b.vertices);
     // Non-finite points were caught above: what remains is a flat or too small point set.
-    if (!shape) return pathError(path + ".vertices", "fewer than 4 non-coplanar points (" + shape.message() + ")");
+    if (!shape)
+      return pathError(path + ".vertices",
+                       "fewer than 4 non-coplanar points (" + shape.message() + ")");
     if (b.mass && b.density) return pathError(path, "give mass or density, not both");
     float mass = 0.0f;
     if (b.mass) {
-      if (!std::isfinite(*b.mass) || *b.mass <= 0.0f) return pathError(path + ".mass", "must be a positive number (kg)");
+      if (!std::isfinite(*b.mass) || *b.mass <= 0.0f)
+        return pathError(path + ".mass", "must be a positive number (kg)");
       mass = *b.mass;
     } else {
       const float density = b.density.value_or(kDefaultDensity);
@@ -124,11 +139,12 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
     const int child = findBody(js.child);
     if (parent < 0) return pathError(path + ".parent", fmt::format("unknown body '{}'", js.parent));
     if (child < 0) return pathError(path + ".child", fmt::format("unknown body '{}'", js.child));
-    if (parent == child) return pathError(path, fmt::format("parent and child are the same body '{}'", js.child));
+    if (parent == child)
+      return pathError(path, fmt::format("parent and child are the same body '{}'", js.child));
     Body& childBody = model.bodies_[static_cast<size_t>(child)];
     if (childBody.joint >= 0) {
-      return pathError(path + ".child",
-                       fmt::format("body '{}' is already the child of joints[{}]", js.child, childBody.joint));
+      return pathError(path + ".child", fmt::format("body '{}' is already the child of joints[{}]",
+                                                    js.child, childBody.joint));
     }
     if (!finite(js.anchorParent)) return pathError(path + ".anchorParent", "not finite");
     if (!finite(js.anchorChild)) return pathError(path + ".anchorChild", "not finite");
@@ -141,7 +157,8 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
     childBody.joint = static_cast<int>(j);
     // A frame that is unit to float precision is kept bit-exact (file round trips).
     const Quat frame = std::abs(norm - 1.0f) < 1e-5f ? js.frame : js.frame.normalized();
-    model.joints_.push_back(Joint{parent, child, js.anchorParent, js.anchorChild, frame, js.minAngle, js.maxAngle});
+    model.joints_.push_back(
+        Joint{parent, child, js.anchorParent, js.anchorChild, frame, js.minAngle, js.maxAngle});
   }
 
   // The parent graph must be a tree: no cycles, exactly one root.
@@ -151,7 +168,8 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
       if (steps > bodyCount) {
         std::string cycle = model.bodies_[static_cast<size_t>(i)].name;
         int c = model.bodies_[static_cast<size_t>(i)].parent;
-        for (int k = 0; k < bodyCount && c != i; ++k, c = model.bodies_[static_cast<size_t>(c)].parent) {
+        for (int k = 0; k < bodyCount && c != i;
+             ++k, c = model.bodies_[static_cast<size_t>(c)].parent) {
           cycle += " -> " + model.bodies_[static_cast<size_t>(c)].name;
         }
         return pathError("joints", fmt::format("cycle in the parent graph: {} -> {}", cycle,
@@ -166,23 +184,27 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
   }
   if (roots.size() != 1) {
     std::string names;
-    for (int r : roots) names += (names.empty() ? "'" : ", '") + model.bodies_[static_cast<size_t>(r)].name + "'";
-    return pathError("joints", fmt::format("{} bodies have no parent joint ({}); exactly one root is allowed",
-                                           roots.size(), names));
+    for (int r : roots)
+      names += (names.empty() ? "'" : ", '") + model.bodies_[static_cast<size_t>(r)].name + "'";
+    return pathError("joints",
+                     fmt::format("{} bodies have no parent joint ({}); exactly one root is allowed",
+                                 roots.size(), names));
   }
   model.root_ = roots[0];
 
   // Kinematic order: by depth, then by index (stable, deterministic).
   std::vector<int> depth(static_cast<size_t>(bodyCount), 0);
   for (int i = 0; i < bodyCount; ++i) {
-    for (int b = model.bodies_[static_cast<size_t>(i)].parent; b >= 0; b = model.bodies_[static_cast<size_t>(b)].parent) {
+    for (int b = model.bodies_[static_cast<size_t>(i)].parent; b >= 0;
+         b = model.bodies_[static_cast<size_t>(b)].parent) {
       ++depth[static_cast<size_t>(i)];
     }
   }
   model.order_.resize(static_cast<size_t>(bodyCount));
   for (int i = 0; i < bodyCount; ++i) model.order_[static_cast<size_t>(i)] = i;
-  std::stable_sort(model.order_.begin(), model.order_.end(),
-                   [&](int a, int b) { return depth[static_cast<size_t>(a)] < depth[static_cast<size_t>(b)]; });
+  std::stable_sort(model.order_.begin(), model.order_.end(), [&](int a, int b) {
+    return depth[static_cast<size_t>(a)] < depth[static_cast<size_t>(b)];
+  });
 
   const size_t n = static_cast<size_t>(bodyCount);
   model.ancestorOrSelf_.assign(n * n, 0);
@@ -206,8 +228,12 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
     const auto& [nameA, nameB] = spec.collision.ignoredPairs[p];
     const int a = findBody(nameA);
     const int b = findBody(nameB);
-    if (a < 0) return pathError(fmt::format("collision.ignorePairs[{}][0]", p), fmt::format("unknown body '{}'", nameA));
-    if (b < 0) return pathError(fmt::format("collision.ignorePairs[{}][1]", p), fmt::format("unknown body '{}'", nameB));
+    if (a < 0)
+      return pathError(fmt::format("collision.ignorePairs[{}][0]", p),
+                       fmt::format("unknown body '{}'", nameA));
+    if (b < 0)
+      return pathError(fmt::format("collision.ignorePairs[{}][1]", p),
+                       fmt::format("unknown body '{}'", nameB));
     model.collides_[static_cast<size_t>(a) * n + static_cast<size_t>(b)] = 0;
     model.collides_[static_cast<size_t>(b) * n + static_cast<size_t>(a)] = 0;
   }
@@ -217,11 +243,13 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
     const KeypointSpec& ks = spec.keypoints[k];
     const std::string path = fmt::format("keypoints[{}]", k);
     if (ks.name.empty()) return pathError(path + ".name", "empty");
-    if (model.keypointIndex(ks.name) >= 0) return pathError(path + ".name", fmt::format("duplicate name '{}'", ks.name));
+    if (model.keypointIndex(ks.name) >= 0)
+      return pathError(path + ".name", fmt::format("duplicate name '{}'", ks.name));
     const int body = findBody(ks.body);
     if (body < 0) return pathError(path + ".body", fmt::format("unknown body '{}'", ks.body));
     if (!finite(ks.point)) return pathError(path + ".point", "not finite");
-    if (!std::isfinite(ks.radius) || ks.radius < 0.0f) return pathError(path + ".radius", "must be a number >= 0");
+    if (!std::isfinite(ks.radius) || ks.radius < 0.0f)
+      return pathError(path + ".radius", "must be a number >= 0");
     model.keypoints_.push_back(Keypoint{ks.name, body, ks.point, ks.radius});
   }
 

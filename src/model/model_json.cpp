@@ -16,8 +16,8 @@
 namespace dynahand::model {
 namespace {
 
-using nlohmann::json;
 using detail::FormatError;
+using nlohmann::json;
 
 constexpr const char* kFormatName = "dynahand-model";
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
@@ -38,9 +38,12 @@ Handedness parseHandedness(const json& v, const std::string& path) {
 
 const char* handednessName(Handedness h) {
   switch (h) {
-    case Handedness::Right: return "right";
-    case Handedness::Left: return "left";
-    case Handedness::None: return "none";
+    case Handedness::Right:
+      return "right";
+    case Handedness::Left:
+      return "left";
+    case Handedness::None:
+      return "none";
   }
   return "none";
 }
@@ -49,9 +52,11 @@ ModelSpec parseSpec(const json& doc) {
   using namespace detail;
   ModelSpec spec;
   if (!doc.is_object()) throw FormatError{"(document)", "expected a JSON object"};
-  checkKeys(doc, "", {"format", "version", "metadata", "bodies", "joints", "collision", "keypoints"});
+  checkKeys(doc, "",
+            {"format", "version", "metadata", "bodies", "joints", "collision", "keypoints"});
   const std::string format = string(field(doc, "", "format"), "format");
-  if (format != kFormatName) throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kFormatName)};
+  if (format != kFormatName)
+    throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kFormatName)};
   const json& version = field(doc, "", "version");
   if (!version.is_number_integer()) throw FormatError{"version", "expected an integer"};
   if (version.get<long long>() != kModelFormatVersion) {
@@ -63,9 +68,11 @@ ModelSpec parseSpec(const json& doc) {
   objectAt(meta, "metadata");
   checkKeys(meta, "metadata", {"name", "handedness", "units", "referenceLength"});
   if (meta.contains("name")) spec.metadata.name = string(meta["name"], "metadata.name");
-  spec.metadata.handedness = parseHandedness(field(meta, "metadata", "handedness"), "metadata.handedness");
+  spec.metadata.handedness =
+      parseHandedness(field(meta, "metadata", "handedness"), "metadata.handedness");
   const std::string units = string(field(meta, "metadata", "units"), "metadata.units");
-  if (units != "m") throw FormatError{"metadata.units", fmt::format("'{}' is not supported (only \"m\")", units)};
+  if (units != "m")
+    throw FormatError{"metadata.units", fmt::format("'{}' is not supported (only \"m\")", units)};
   if (meta.contains("referenceLength")) {
     spec.metadata.referenceLength = number(meta["referenceLength"], "metadata.referenceLength");
   }
@@ -80,7 +87,8 @@ ModelSpec parseSpec(const json& doc) {
     if (b.contains("mass")) body.mass = number(b["mass"], path + ".mass");
     if (b.contains("density")) body.density = number(b["density"], path + ".density");
     const json& verts = arrayAt(field(b, path, "vertices"), path + ".vertices");
-    for (size_t v = 0; v < verts.size(); ++v) body.vertices.push_back(vec3(verts[v], fmt::format("{}.vertices[{}]", path, v)));
+    for (size_t v = 0; v < verts.size(); ++v)
+      body.vertices.push_back(vec3(verts[v], fmt::format("{}.vertices[{}]", path, v)));
     spec.bodies.push_back(std::move(body));
   }
 
@@ -88,7 +96,8 @@ ModelSpec parseSpec(const json& doc) {
   for (size_t j = 0; j < joints.size(); ++j) {
     const std::string path = fmt::format("joints[{}]", j);
     const json& o = objectAt(joints[j], path);
-    checkKeys(o, path, {"parent", "child", "anchorParent", "anchorChild", "frame", "minDeg", "maxDeg"});
+    checkKeys(o, path,
+              {"parent", "child", "anchorParent", "anchorChild", "frame", "minDeg", "maxDeg"});
     JointSpec joint;
     joint.parent = string(field(o, path, "parent"), path + ".parent");
     joint.child = string(field(o, path, "child"), path + ".child");
@@ -104,7 +113,8 @@ ModelSpec parseSpec(const json& doc) {
     const json& c = objectAt(doc["collision"], "collision");
     checkKeys(c, "collision", {"ignoreJointNeighbours", "ignorePairs"});
     if (c.contains("ignoreJointNeighbours")) {
-      if (!c["ignoreJointNeighbours"].is_boolean()) throw FormatError{"collision.ignoreJointNeighbours", "expected true or false"};
+      if (!c["ignoreJointNeighbours"].is_boolean())
+        throw FormatError{"collision.ignoreJointNeighbours", "expected true or false"};
       spec.collision.ignoreJointNeighbours = c["ignoreJointNeighbours"].get<bool>();
     }
     if (c.contains("ignorePairs")) {
@@ -113,7 +123,8 @@ ModelSpec parseSpec(const json& doc) {
         const std::string path = fmt::format("collision.ignorePairs[{}]", p);
         const json& pair = arrayAt(pairs[p], path);
         if (pair.size() != 2) throw FormatError{path, "expected two body names"};
-        spec.collision.ignoredPairs.emplace_back(string(pair[0], path + "[0]"), string(pair[1], path + "[1]"));
+        spec.collision.ignoredPairs.emplace_back(string(pair[0], path + "[0]"),
+                                                 string(pair[1], path + "[1]"));
       }
     }
   }
@@ -142,7 +153,9 @@ std::string num(float v) {
   const auto result = std::to_chars(buf, buf + sizeof buf, v);
   return std::string(buf, result.ptr);
 }
-std::string vec(const Vec3& v) { return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]"; }
+std::string vec(const Vec3& v) {
+  return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]";
+}
 std::string degrees(const Vec3& rad) {
   std::string out = "[";
   for (int axis = 0; axis < 3; ++axis) {
@@ -151,7 +164,9 @@ std::string degrees(const Vec3& rad) {
   }
   return out + "]";
 }
-std::string quoted(const std::string& s) { return json(s).dump(); }
+std::string quoted(const std::string& s) {
+  return json(s).dump();
+}
 
 }  // namespace
 
@@ -185,14 +200,18 @@ std::string modelToJson(const ArticulatedModel& model) {
   const ModelSpec spec = model.spec();
   std::string out;
   out += "{\n";
-  out += fmt::format("  \"format\": \"{}\",\n  \"version\": {},\n", kFormatName, kModelFormatVersion);
-  out += fmt::format("  \"metadata\": {{\"name\": {}, \"handedness\": \"{}\", \"units\": \"m\", \"referenceLength\": {}}},\n",
-                     quoted(spec.metadata.name), handednessName(spec.metadata.handedness),
-                     num(spec.metadata.referenceLength));
+  out +=
+      fmt::format("  \"format\": \"{}\",\n  \"version\": {},\n", kFormatName, kModelFormatVersion);
+  out += fmt::format(
+      "  \"metadata\": {{\"name\": {}, \"handedness\": \"{}\", \"units\": \"m\", "
+      "\"referenceLength\": {}}},\n",
+      quoted(spec.metadata.name), handednessName(spec.metadata.handedness),
+      num(spec.metadata.referenceLength));
   out += "  \"bodies\": [\n";
   for (size_t i = 0; i < spec.bodies.size(); ++i) {
     const BodySpec& b = spec.bodies[i];
-    out += fmt::format("    {{\"name\": {}, \"mass\": {},\n     \"vertices\": [", quoted(b.name), num(b.mass.value_or(0.0f)));
+    out += fmt::format("    {{\"name\": {}, \"mass\": {},\n     \"vertices\": [", quoted(b.name),
+                       num(b.mass.value_or(0.0f)));
     for (size_t v = 0; v < b.vertices.size(); ++v) {
       out += (v == 0 ? "" : (v % 4 == 0 ? ",\n                  " : ", ")) + vec(b.vertices[v]);
     }
@@ -204,9 +223,9 @@ std::string modelToJson(const ArticulatedModel& model) {
     out += fmt::format(
         "    {{\"parent\": {}, \"child\": {}, \"anchorParent\": {}, \"anchorChild\": {},\n"
         "     \"frame\": [{}, {}, {}, {}], \"minDeg\": {}, \"maxDeg\": {}}}{}\n",
-        quoted(o.parent), quoted(o.child), vec(o.anchorParent), vec(o.anchorChild), num(o.frame.w()), num(o.frame.x()),
-        num(o.frame.y()), num(o.frame.z()), degrees(o.minAngle), degrees(o.maxAngle),
-        j + 1 < spec.joints.size() ? "," : "");
+        quoted(o.parent), quoted(o.child), vec(o.anchorParent), vec(o.anchorChild),
+        num(o.frame.w()), num(o.frame.x()), num(o.frame.y()), num(o.frame.z()), degrees(o.minAngle),
+        degrees(o.maxAngle), j + 1 < spec.joints.size() ? "," : "");
   }
   out += "  ],\n";
   out += fmt::format("  \"collision\": {{\"ignoreJointNeighbours\": {}, \"ignorePairs\": [",
@@ -218,8 +237,9 @@ std::string modelToJson(const ArticulatedModel& model) {
   out += "]},\n  \"keypoints\": [\n";
   for (size_t k = 0; k < spec.keypoints.size(); ++k) {
     const KeypointSpec& kp = spec.keypoints[k];
-    out += fmt::format("    {{\"name\": {}, \"body\": {}, \"point\": {}, \"radius\": {}}}{}\n", quoted(kp.name),
-                       quoted(kp.body), vec(kp.point), num(kp.radius), k + 1 < spec.keypoints.size() ? "," : "");
+    out += fmt::format("    {{\"name\": {}, \"body\": {}, \"point\": {}, \"radius\": {}}}{}\n",
+                       quoted(kp.name), quoted(kp.body), vec(kp.point), num(kp.radius),
+                       k + 1 < spec.keypoints.size() ? "," : "");
   }
   out += "  ]\n}\n";
   return out;

@@ -13,8 +13,8 @@
 namespace dynahand::model {
 namespace {
 
-using nlohmann::json;
 using detail::FormatError;
+using nlohmann::json;
 
 constexpr const char* kFormatName = "dynahand-pose";
 
@@ -30,15 +30,17 @@ void parseHeader(const json& doc, PoseSequence& seq) {
   objectAt(doc, "(header)");
   checkKeys(doc, "", {"format", "version", "bodies"});
   const std::string format = string(field(doc, "", "format"), "format");
-  if (format != kFormatName) throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kFormatName)};
+  if (format != kFormatName)
+    throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kFormatName)};
   const json& version = field(doc, "", "version");
   if (!version.is_number_integer() || version.get<long long>() != kPoseFormatVersion) {
-    throw FormatError{"version", fmt::format("{} is not supported (this build reads version {})", version.dump(),
-                                             kPoseFormatVersion)};
+    throw FormatError{"version", fmt::format("{} is not supported (this build reads version {})",
+                                             version.dump(), kPoseFormatVersion)};
   }
   const json& bodies = arrayAt(field(doc, "", "bodies"), "bodies");
   if (bodies.empty()) throw FormatError{"bodies", "no bodies"};
-  for (size_t i = 0; i < bodies.size(); ++i) seq.bodyNames.push_back(string(bodies[i], fmt::format("bodies[{}]", i)));
+  for (size_t i = 0; i < bodies.size(); ++i)
+    seq.bodyNames.push_back(string(bodies[i], fmt::format("bodies[{}]", i)));
 }
 
 ModelPose parseFrame(const json& doc, size_t expectedFrame, size_t bodyCount) {
@@ -46,9 +48,10 @@ ModelPose parseFrame(const json& doc, size_t expectedFrame, size_t bodyCount) {
   objectAt(doc, "(frame)");
   checkKeys(doc, "", {"frame", "poses"});
   const json& frame = field(doc, "", "frame");
-  if (!frame.is_number_integer() || frame.get<long long>() != static_cast<long long>(expectedFrame)) {
-    throw FormatError{"frame", fmt::format("{}, expected {} (frames are numbered in order from 0)", frame.dump(),
-                                           expectedFrame)};
+  if (!frame.is_number_integer() ||
+      frame.get<long long>() != static_cast<long long>(expectedFrame)) {
+    throw FormatError{"frame", fmt::format("{}, expected {} (frames are numbered in order from 0)",
+                                           frame.dump(), expectedFrame)};
   }
   const json& poses = arrayAt(field(doc, "", "poses"), "poses");
   if (poses.size() != bodyCount) {
@@ -59,11 +62,13 @@ ModelPose parseFrame(const json& doc, size_t expectedFrame, size_t bodyCount) {
   for (size_t b = 0; b < bodyCount; ++b) {
     const std::string path = fmt::format("poses[{}]", b);
     const json& v = poses[b];
-    if (!v.is_array() || v.size() != 7) throw FormatError{path, "expected [px, py, pz, qw, qx, qy, qz]"};
+    if (!v.is_array() || v.size() != 7)
+      throw FormatError{path, "expected [px, py, pz, qw, qx, qy, qz]"};
     float x[7];
     for (size_t k = 0; k < 7; ++k) x[k] = number(v[k], fmt::format("{}[{}]", path, k));
     const Quat q(x[3], x[4], x[5], x[6]);
-    if (std::abs(q.norm() - 1.0f) > 1e-3f) throw FormatError{path, "orientation is not a unit quaternion"};
+    if (std::abs(q.norm() - 1.0f) > 1e-3f)
+      throw FormatError{path, "orientation is not a unit quaternion"};
     pose.bodies[b] = Pose{Vec3(x[0], x[1], x[2]), q.normalized()};
   }
   return pose;
@@ -98,26 +103,28 @@ Result<PoseSequence> loadPoseSequence(const std::filesystem::path& path) {
       return Error{fmt::format("{}:{}: {}: {}", path.string(), lineNumber, e.path, e.problem)};
     }
   }
-  if (!haveHeader) return Error{fmt::format("{}: empty pose sequence (no header line)", path.string())};
+  if (!haveHeader)
+    return Error{fmt::format("{}: empty pose sequence (no header line)", path.string())};
   return seq;
 }
 
 Status savePoseSequence(const PoseSequence& sequence, const std::filesystem::path& path) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) return Error{fmt::format("{}: cannot open for writing", path.string())};
-  out << fmt::format("{{\"format\": \"{}\", \"version\": {}, \"bodies\": {}}}\n", kFormatName, kPoseFormatVersion,
-                     json(sequence.bodyNames).dump());
+  out << fmt::format("{{\"format\": \"{}\", \"version\": {}, \"bodies\": {}}}\n", kFormatName,
+                     kPoseFormatVersion, json(sequence.bodyNames).dump());
   for (size_t f = 0; f < sequence.frames.size(); ++f) {
     const ModelPose& pose = sequence.frames[f];
     if (pose.bodies.size() != sequence.bodyNames.size()) {
-      return Error{fmt::format("{}: frame {} has {} poses for {} bodies", path.string(), f, pose.bodies.size(),
-                               sequence.bodyNames.size())};
+      return Error{fmt::format("{}: frame {} has {} poses for {} bodies", path.string(), f,
+                               pose.bodies.size(), sequence.bodyNames.size())};
     }
     std::string line = fmt::format("{{\"frame\": {}, \"poses\": [", f);
     for (size_t b = 0; b < pose.bodies.size(); ++b) {
       const Pose& p = pose.bodies[b];
-      line += fmt::format("{}[{}, {}, {}, {}, {}, {}, {}]", b ? ", " : "", num(p.p.x()), num(p.p.y()), num(p.p.z()),
-                          num(p.q.w()), num(p.q.x()), num(p.q.y()), num(p.q.z()));
+      line +=
+          fmt::format("{}[{}, {}, {}, {}, {}, {}, {}]", b ? ", " : "", num(p.p.x()), num(p.p.y()),
+                      num(p.p.z()), num(p.q.w()), num(p.q.x()), num(p.q.y()), num(p.q.z()));
     }
     out << line << "]}\n";
   }
@@ -128,13 +135,14 @@ Status savePoseSequence(const PoseSequence& sequence, const std::filesystem::pat
 
 Status checkPoseSequence(const PoseSequence& sequence, const ArticulatedModel& model) {
   if (sequence.bodyNames.size() != model.bodies().size()) {
-    return Error{fmt::format("pose sequence has {} bodies, the model '{}' has {}", sequence.bodyNames.size(),
-                             model.metadata().name, model.bodies().size())};
+    return Error{fmt::format("pose sequence has {} bodies, the model '{}' has {}",
+                             sequence.bodyNames.size(), model.metadata().name,
+                             model.bodies().size())};
   }
   for (size_t b = 0; b < sequence.bodyNames.size(); ++b) {
     if (sequence.bodyNames[b] != model.bodies()[b].name) {
-      return Error{fmt::format("pose sequence body {} is '{}', the model's is '{}'", b, sequence.bodyNames[b],
-                               model.bodies()[b].name)};
+      return Error{fmt::format("pose sequence body {} is '{}', the model's is '{}'", b,
+                               sequence.bodyNames[b], model.bodies()[b].name)};
     }
   }
   return Ok{};

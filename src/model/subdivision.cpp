@@ -11,7 +11,7 @@ namespace dynahand::model {
 PolygonMesh catmullClark(const PolygonMesh& mesh) {
   const size_t vertexCount = mesh.vertices.size();
   struct Edge {
-    int index = -1;        // new vertex index of the edge point
+    int index = -1;  // new vertex index of the edge point
     std::vector<int> faces;
   };
   std::map<std::pair<int, int>, Edge> edges;  // ordered: deterministic numbering
@@ -42,7 +42,8 @@ PolygonMesh catmullClark(const PolygonMesh& mesh) {
     const Vec3& b = mesh.vertices[static_cast<size_t>(ends.second)];
     Vec3 point = 0.5f * (a + b);
     if (edge.faces.size() == 2) {
-      point = 0.25f * (a + b + facePoints[static_cast<size_t>(edge.faces[0])] + facePoints[static_cast<size_t>(edge.faces[1])]);
+      point = 0.25f * (a + b + facePoints[static_cast<size_t>(edge.faces[0])] +
+                       facePoints[static_cast<size_t>(edge.faces[1])]);
     }
     edge.index = static_cast<int>(out.vertices.size());
     out.vertices.push_back(point);
@@ -74,8 +75,8 @@ PolygonMesh catmullClark(const PolygonMesh& mesh) {
     for (size_t i = 0; i < k; ++i) {
       const int prev = face[(i + k - 1) % k];
       const int next = face[(i + 1) % k];
-      out.faces.push_back({face[i], edges.at(key(face[i], next)).index, faceBase + static_cast<int>(f),
-                           edges.at(key(prev, face[i])).index});
+      out.faces.push_back({face[i], edges.at(key(face[i], next)).index,
+                           faceBase + static_cast<int>(f), edges.at(key(prev, face[i])).index});
     }
   }
   return out;

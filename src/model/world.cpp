@@ -24,8 +24,9 @@ ModelInWorld addToWorld(physics::World& world, const ArticulatedModel& model, co
     def.shape = world.addShape(body.shape);
     def.pose = pose.bodies[b];
     def.mass = body.mass;
-    def.type = options.staticRoot && static_cast<int>(b) == model.root() ? physics::BodyType::Static
-                                                                          : physics::BodyType::Dynamic;
+    def.type = options.staticRoot && static_cast<int>(b) == model.root()
+                   ? physics::BodyType::Static
+                   : physics::BodyType::Dynamic;
     def.linearDamping = options.linearDamping;
     def.angularDamping = options.angularDamping;
     ids.bodies.push_back(world.addBody(def));
@@ -47,8 +48,8 @@ ModelInWorld addToWorld(physics::World& world, const ArticulatedModel& model, co
   }
   for (int a = 0; a < model.bodyCount(); ++a) {
     for (int b = a + 1; b < model.bodyCount(); ++b) {
-      world.setCollisionEnabled(ids.bodies[static_cast<size_t>(a)], ids.bodies[static_cast<size_t>(b)],
-                                model.collides(a, b));
+      world.setCollisionEnabled(ids.bodies[static_cast<size_t>(a)],
+                                ids.bodies[static_cast<size_t>(b)], model.collides(a, b));
     }
   }
   return ids;

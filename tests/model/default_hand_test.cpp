@@ -21,10 +21,11 @@ const ArticulatedModel& rightHand() {
 
 TEST(DefaultHand, SeventeenBodiesInTheIntelOrder) {
   const ArticulatedModel& hand = rightHand();
-  const char* names[17] = {"forearm",         "palm",          "thumb_metacarpal", "thumb_proximal", "thumb_distal",
-                           "index_proximal",  "index_middle",  "index_distal",     "middle_proximal", "middle_middle",
-                           "middle_distal",   "ring_proximal", "ring_middle",      "ring_distal",    "pinky_proximal",
-                           "pinky_middle",    "pinky_distal"};
+  const char* names[17] = {
+      "forearm",        "palm",          "thumb_metacarpal", "thumb_proximal",  "thumb_distal",
+      "index_proximal", "index_middle",  "index_distal",     "middle_proximal", "middle_middle",
+      "middle_distal",  "ring_proximal", "ring_middle",      "ring_distal",     "pinky_proximal",
+      "pinky_middle",   "pinky_distal"};
   ASSERT_EQ(hand.bodyCount(), 17);
   ASSERT_EQ(hand.jointCount(), 16);
   for (int b = 0; b < 17; ++b) EXPECT_EQ(hand.bodies()[static_cast<size_t>(b)].name, names[b]);
@@ -39,8 +40,8 @@ TEST(DefaultHand, EveryBodyIsAValidHullWithPlausibleMass) {
   float total = 0.0f;
   for (const Body& body : rightHand().bodies()) {
     EXPECT_GE(body.shape.vertices().size(), 4u) << body.name;
-    EXPECT_GT(body.shape.volume(), 1e-6f) << body.name;              // > 1 cm^3
-    EXPECT_GT(body.shape.inscribedRadius(), 0.004f) << body.name;   // no sliver
+    EXPECT_GT(body.shape.volume(), 1e-6f) << body.name;            // > 1 cm^3
+    EXPECT_GT(body.shape.inscribedRadius(), 0.004f) << body.name;  // no sliver
     EXPECT_NEAR(body.mass, kDefaultDensity * body.shape.volume(), 1e-6f) << body.name;
     total += body.mass;
   }
@@ -56,8 +57,10 @@ TEST(DefaultHand, AdjacentBonesOverlapAroundEveryJoint) {
     const Body& child = hand.bodies()[static_cast<size_t>(joint.child)];
     // The joint centre lies at least 4 mm deep inside both bodies, so a ball of 4 mm around
     // it is shared by both at every angle: no gap can open.
-    EXPECT_LT(parent.shape.signedDistance(joint.anchorParent), -0.004f) << parent.name << " / " << child.name;
-    EXPECT_LT(child.shape.signedDistance(joint.anchorChild), -0.004f) << parent.name << " / " << child.name;
+    EXPECT_LT(parent.shape.signedDistance(joint.anchorParent), -0.004f)
+        << parent.name << " / " << child.name;
+    EXPECT_LT(child.shape.signedDistance(joint.anchorChild), -0.004f)
+        << parent.name << " / " << child.name;
     EXPECT_FALSE(hand.collides(joint.parent, joint.child));
   }
   std::mt19937 rng(7);
@@ -65,9 +68,9 @@ TEST(DefaultHand, AdjacentBonesOverlapAroundEveryJoint) {
     const ModelPose pose = forwardKinematics(hand, fixtures::randomValidAngles(hand, rng));
     for (const Joint& joint : hand.joints()) {
       EXPECT_TRUE(fixtures::overlaps(hand.bodies()[static_cast<size_t>(joint.parent)].shape,
-                                 pose.bodies[static_cast<size_t>(joint.parent)],
-                                 hand.bodies()[static_cast<size_t>(joint.child)].shape,
-                                 pose.bodies[static_cast<size_t>(joint.child)], 0.001f));
+                                     pose.bodies[static_cast<size_t>(joint.parent)],
+                                     hand.bodies()[static_cast<size_t>(joint.child)].shape,
+                                     pose.bodies[static_cast<size_t>(joint.child)], 0.001f));
     }
   }
 }
@@ -78,9 +81,11 @@ TEST(DefaultHand, NoCollidingPairInterpenetratesAtRest) {
   for (int a = 0; a < hand.bodyCount(); ++a) {
     for (int b = a + 1; b < hand.bodyCount(); ++b) {
       if (!hand.collides(a, b)) continue;
-      EXPECT_FALSE(fixtures::overlaps(hand.bodies()[static_cast<size_t>(a)].shape, rest.bodies[static_cast<size_t>(a)],
-                                  hand.bodies()[static_cast<size_t>(b)].shape, rest.bodies[static_cast<size_t>(b)], 0.0f))
-          << hand.bodies()[static_cast<size_t>(a)].name << " / " << hand.bodies()[static_cast<size_t>(b)].name;
+      EXPECT_FALSE(fixtures::overlaps(
+          hand.bodies()[static_cast<size_t>(a)].shape, rest.bodies[static_cast<size_t>(a)],
+          hand.bodies()[static_cast<size_t>(b)].shape, rest.bodies[static_cast<size_t>(b)], 0.0f))
+          << hand.bodies()[static_cast<size_t>(a)].name << " / "
+          << hand.bodies()[static_cast<size_t>(b)].name;
     }
   }
 }
@@ -92,8 +97,10 @@ TEST(DefaultHand, DimensionsMatchTheParameters) {
   // Hand length: wrist crease to middle fingertip along the hand (body z of the flat hand).
   EXPECT_NEAR(kp[12].z() - kp[0].z(), 0.18f, 1e-5f);
   // Palm width: the outer knuckles' surfaces (index MCP to pinky MCP plus their radii).
-  const float width = (kp[5] - kp[17]).norm() + hand.keypoints()[static_cast<size_t>(hand.keypointIndex("index_mcp"))].radius +
-                      hand.keypoints()[static_cast<size_t>(hand.keypointIndex("pinky_mcp"))].radius;
+  const float width =
+      (kp[5] - kp[17]).norm() +
+      hand.keypoints()[static_cast<size_t>(hand.keypointIndex("index_mcp"))].radius +
+      hand.keypoints()[static_cast<size_t>(hand.keypointIndex("pinky_mcp"))].radius;
   EXPECT_NEAR(width, 0.08f, 0.005f);
   EXPECT_FLOAT_EQ(hand.metadata().referenceLength, 0.18f);
 }
@@ -103,8 +110,8 @@ TEST(DefaultHand, LimitsAreRealistic) {
   for (int f = 0; f < 4; ++f) {
     const Joint& mcp = hand.joints()[static_cast<size_t>(4 + 3 * f)];
     const Joint& pip = hand.joints()[static_cast<size_t>(5 + 3 * f)];
-    EXPECT_GE(mcp.maxAngle.x(), 85 * kDeg);   // MCP flexion ~90 degrees
-    EXPECT_LT(mcp.minAngle.x(), 0.0f);        // some hyperextension
+    EXPECT_GE(mcp.maxAngle.x(), 85 * kDeg);                     // MCP flexion ~90 degrees
+    EXPECT_LT(mcp.minAngle.x(), 0.0f);                          // some hyperextension
     EXPECT_GT(mcp.maxAngle.y() - mcp.minAngle.y(), 20 * kDeg);  // abduction / adduction
     EXPECT_GE(pip.maxAngle.x(), 100 * kDeg);
     EXPECT_EQ(pip.minAngle.y(), pip.maxAngle.y());  // hinge: no abduction, no twist
@@ -112,7 +119,8 @@ TEST(DefaultHand, LimitsAreRealistic) {
   }
   // Thumb CMC: flexion, abduction and axial rotation (opposition).
   const Joint& cmc = hand.joints()[1];
-  for (int axis = 0; axis < 3; ++axis) EXPECT_GT(cmc.maxAngle[axis] - cmc.minAngle[axis], 40 * kDeg);
+  for (int axis = 0; axis < 3; ++axis)
+    EXPECT_GT(cmc.maxAngle[axis] - cmc.minAngle[axis], 40 * kDeg);
 }
 
 TEST(DefaultHand, ThumbOpposesEachFingertip) {
@@ -127,7 +135,9 @@ TEST(DefaultHand, ThumbOpposesEachFingertip) {
     JointAngles angles = fixtures::randomValidAngles(hand, rng);
     angles.angles[0] = Vec3::Zero();
     const auto kp = keypoints21(hand, forwardKinematics(hand, angles));
-    for (int f = 0; f < 4; ++f) closest[static_cast<size_t>(f)] = std::min(closest[static_cast<size_t>(f)], (kp[4] - kp[static_cast<size_t>(8 + 4 * f)]).norm());
+    for (int f = 0; f < 4; ++f)
+      closest[static_cast<size_t>(f)] = std::min(
+          closest[static_cast<size_t>(f)], (kp[4] - kp[static_cast<size_t>(8 + 4 * f)]).norm());
   }
   for (int f = 0; f < 4; ++f) EXPECT_LT(closest[static_cast<size_t>(f)], 0.02f) << "finger " << f;
 }
@@ -154,7 +164,8 @@ TEST(DefaultHand, ScalingBySScalesAllLengthsByS) {
     const Body& a = hand.bodies()[b];
     const Body& c = big.bodies()[b];
     ASSERT_EQ(a.vertices.size(), c.vertices.size());
-    for (size_t v = 0; v < a.vertices.size(); ++v) EXPECT_LT((c.vertices[v] - s * a.vertices[v]).norm(), 1e-6f);
+    for (size_t v = 0; v < a.vertices.size(); ++v)
+      EXPECT_LT((c.vertices[v] - s * a.vertices[v]).norm(), 1e-6f);
     EXPECT_NEAR(c.shape.volume(), s * s * s * a.shape.volume(), 1e-4f * c.shape.volume());
     EXPECT_NEAR(c.mass, s * s * s * a.mass, 1e-4f * c.mass);
   }
@@ -186,7 +197,8 @@ TEST(DefaultHand, LeftHandIsTheMirrorImage) {
     EXPECT_TRUE(withinLimits(left, mirrored, 1e-6f));
     const auto kr = keypoints21(right, forwardKinematics(right, angles));
     const auto kl = keypoints21(left, forwardKinematics(left, mirrored));
-    for (size_t i = 0; i < 21; ++i) EXPECT_LT((kl[i] - Vec3(-kr[i].x(), kr[i].y(), kr[i].z())).norm(), 1e-5f);
+    for (size_t i = 0; i < 21; ++i)
+      EXPECT_LT((kl[i] - Vec3(-kr[i].x(), kr[i].y(), kr[i].z())).norm(), 1e-5f);
   }
   // At rest the right thumb is on +x, the left thumb on -x.
   const auto rest = keypoints21(left, forwardKinematics(left, zeroAngles(left)));

@@ -32,7 +32,8 @@ TEST(Fit, RecoversRandomValidPosesFromTheirOwnKeypoints) {
     const Result<FitResult> fit = fitter.fit21(targets);
     ASSERT_TRUE(fit.ok()) << fit.message();
     EXPECT_TRUE(withinLimits(hand(), fit->angles));
-    const float error = meanDistance(keypoints21(hand(), forwardKinematics(hand(), fit->angles)), targets);
+    const float error =
+        meanDistance(keypoints21(hand(), forwardKinematics(hand(), fit->angles)), targets);
     EXPECT_NEAR(error, fit->meanError, 1e-6f);
     EXPECT_LT(error, 0.001f) << "trial " << trial;
     worst = std::max(worst, error);
@@ -54,7 +55,8 @@ TEST(Fit, RecoversTheScale) {
     EXPECT_LT(fit->meanError, 0.001f);
     // The angles are for the scaled model.
     const ArticulatedModel fitted = scaleModel(hand(), fit->scale);
-    EXPECT_LT(meanDistance(keypoints21(fitted, forwardKinematics(fitted, fit->angles)), targets), 0.001f);
+    EXPECT_LT(meanDistance(keypoints21(fitted, forwardKinematics(fitted, fit->angles)), targets),
+              0.001f);
   }
 }
 
@@ -69,7 +71,8 @@ TEST(Fit, NoisyKeypointsGiveAPlausiblePose) {
   ASSERT_TRUE(fit.ok()) << fit.message();
   EXPECT_TRUE(withinLimits(hand(), fit->angles));
   EXPECT_LT(fit->meanError, 0.006f);
-  EXPECT_LT(meanDistance(keypoints21(hand(), forwardKinematics(hand(), fit->angles)), clean), 0.006f);
+  EXPECT_LT(meanDistance(keypoints21(hand(), forwardKinematics(hand(), fit->angles)), clean),
+            0.006f);
 }
 
 TEST(Fit, StartsFromAGivenPose) {
@@ -80,7 +83,8 @@ TEST(Fit, StartsFromAGivenPose) {
   start.root.p += Vec3(0.01f, 0, 0);
   FitOptions options;
   options.initial = &start;
-  const Result<FitResult> fit = fitToKeypoints(hand(), keypoints21(hand(), forwardKinematics(hand(), truth)), options);
+  const Result<FitResult> fit =
+      fitToKeypoints(hand(), keypoints21(hand(), forwardKinematics(hand(), truth)), options);
   ASSERT_TRUE(fit.ok()) << fit.message();
   EXPECT_LT(fit->meanError, 0.001f);
 }
@@ -95,7 +99,10 @@ TEST(FitErrors, NonFiniteTarget) {
 
 TEST(FitErrors, ModelWithoutHandKeypoints) {
   ModelSpec spec;
-  spec.bodies.push_back({"box", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, std::nullopt, std::nullopt});
+  spec.bodies.push_back({"box",
+                         {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)},
+                         std::nullopt,
+                         std::nullopt});
   const ArticulatedModel box = buildModel(spec).value();
   const Result<FitResult> fit = fitToKeypoints(box, std::array<Vec3, 21>{});
   ASSERT_FALSE(fit.ok());

@@ -13,7 +13,8 @@ namespace {
 // A unit cube as a quad mesh.
 PolygonMesh cube() {
   PolygonMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back(Vec3(i & 1 ? 1.f : -1.f, i & 2 ? 1.f : -1.f, i & 4 ? 1.f : -1.f));
+  for (int i = 0; i < 8; ++i)
+    m.vertices.push_back(Vec3(i & 1 ? 1.f : -1.f, i & 2 ? 1.f : -1.f, i & 4 ? 1.f : -1.f));
   m.faces = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   return m;
 }
@@ -36,7 +37,8 @@ TEST(CatmullClark, CubeCountsAndKnownPositions) {
   EXPECT_TRUE(foundEdge);
   const PolygonMesh twice = catmullClark(once);
   EXPECT_EQ(twice.faces.size(), 96u);
-  for (const Vec3& v : twice.vertices) EXPECT_LE(v.cwiseAbs().maxCoeff(), 1.0f + 1e-6f);  // shrinks inside the cage
+  for (const Vec3& v : twice.vertices)
+    EXPECT_LE(v.cwiseAbs().maxCoeff(), 1.0f + 1e-6f);  // shrinks inside the cage
 }
 
 class IntelData : public ::testing::Test {
@@ -75,7 +77,8 @@ TEST_F(IntelData, ModelImports) {
 
 TEST_F(IntelData, AnimbankKeypointsHaveConstantBoneLengths) {
   DYNAHAND_REQUIRE_SHARED_DATA(dir);
-  const Result<std::vector<ModelPose>> poses = loadIntelPoses(dir / "intel/animbank.pose", intel_->model);
+  const Result<std::vector<ModelPose>> poses =
+      loadIntelPoses(dir / "intel/animbank.pose", intel_->model);
   ASSERT_TRUE(poses.ok()) << poses.message();
   ASSERT_EQ(poses->size(), 2336u);
   // Bones of the 21-keypoint skeleton: (parent, child) keypoint pairs across two bodies.
@@ -91,7 +94,9 @@ TEST_F(IntelData, AnimbankKeypointsHaveConstantBoneLengths) {
   for (const ModelPose& pose : *poses) {
     const auto kp = keypoints21(intel_->model, pose);
     for (size_t i = 0; i < bones.size(); ++i) {
-      const float len = (kp[static_cast<size_t>(bones[i].first)] - kp[static_cast<size_t>(bones[i].second)]).norm();
+      const float len =
+          (kp[static_cast<size_t>(bones[i].first)] - kp[static_cast<size_t>(bones[i].second)])
+              .norm();
       lo[i] = std::min(lo[i], len);
       hi[i] = std::max(hi[i], len);
     }
@@ -120,7 +125,8 @@ TEST_F(IntelData, AnimbankKeypointsHaveConstantBoneLengths) {
 
 TEST_F(IntelData, PoseFileExportRoundTrip) {
   DYNAHAND_REQUIRE_SHARED_DATA(dir);
-  const Result<std::vector<ModelPose>> poses = loadIntelPoses(dir / "intel/hand_data_example.pose", intel_->model);
+  const Result<std::vector<ModelPose>> poses =
+      loadIntelPoses(dir / "intel/hand_data_example.pose", intel_->model);
   ASSERT_TRUE(poses.ok()) << poses.message();
   ASSERT_EQ(poses->size(), 69u);
   const std::filesystem::path out = test::scratchDir("intel_pose") / "out.pose";
@@ -142,12 +148,14 @@ TEST_F(IntelData, MalformedPoseLines) {
   std::ofstream(scratch / "short.pose") << "0 0 0 0 0 0 1\n";
   const auto shortPoses = loadIntelPoses(scratch / "short.pose", intel_->model);
   ASSERT_FALSE(shortPoses.ok());
-  EXPECT_NE(shortPoses.message().find("short.pose:1: 7 numbers, expected 119 (17 bodies x 7)"), std::string::npos)
+  EXPECT_NE(shortPoses.message().find("short.pose:1: 7 numbers, expected 119 (17 bodies x 7)"),
+            std::string::npos)
       << shortPoses.message();
   std::ofstream(scratch / "text.pose") << "0 0 zero\n";
   const auto textPoses = loadIntelPoses(scratch / "text.pose", intel_->model);
   ASSERT_FALSE(textPoses.ok());
-  EXPECT_NE(textPoses.message().find("text.pose:1: 'zero' is not a number"), std::string::npos) << textPoses.message();
+  EXPECT_NE(textPoses.message().find("text.pose:1: 'zero' is not a number"), std::string::npos)
+      << textPoses.message();
   std::ofstream(scratch / "empty.pose") << "\n";
   EXPECT_FALSE(loadIntelPoses(scratch / "empty.pose", intel_->model).ok());
 }
@@ -155,10 +163,12 @@ TEST_F(IntelData, MalformedPoseLines) {
 TEST(IntelImportErrors, MissingAndMalformedFiles) {
   EXPECT_FALSE(importIntelModel("/nonexistent/model_hand.json").ok());
   const std::filesystem::path scratch = test::scratchDir("intel_import_errors");
-  std::ofstream(scratch / "bad.json") << R"({"controlcages": [{"verts": [[0,0,0]], "faces": [[0, 1, 2]]}], "joints": [], "pose": [[0,0,0,0,0,0,1]]})";
+  std::ofstream(scratch / "bad.json")
+      << R"({"controlcages": [{"verts": [[0,0,0]], "faces": [[0, 1, 2]]}], "joints": [], "pose": [[0,0,0,0,0,0,1]]})";
   const Result<IntelModel> bad = importIntelModel(scratch / "bad.json");
   ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.message().find("controlcages[0].faces[0][1]: index 1 out of range [0, 1)"), std::string::npos)
+  EXPECT_NE(bad.message().find("controlcages[0].faces[0][1]: index 1 out of range [0, 1)"),
+            std::string::npos)
       << bad.message();
 }
 

@@ -70,7 +70,8 @@ TEST(Keypoints21, FollowTheRootPose) {
   atOrigin.root = Pose::identity();
   const auto moved = keypoints21(hand(), forwardKinematics(hand(), angles));
   const auto local = keypoints21(hand(), forwardKinematics(hand(), atOrigin));
-  for (size_t k = 0; k < 21; ++k) EXPECT_LT((moved[k] - angles.root.transform(local[k])).norm(), 1e-5f);
+  for (size_t k = 0; k < 21; ++k)
+    EXPECT_LT((moved[k] - angles.root.transform(local[k])).norm(), 1e-5f);
 }
 
 TEST(OpenXr26, OrderPositionsAndAxes) {
@@ -83,11 +84,12 @@ TEST(OpenXr26, OrderPositionsAndAxes) {
   EXPECT_STREQ(names[1], "wrist");
   EXPECT_STREQ(names[25], "little_tip");
   // Joints shared with MediaPipe sit at the same places.
-  EXPECT_LT((xr[1].pose.p - kp[0]).norm(), 1e-6f);  // wrist
+  EXPECT_LT((xr[1].pose.p - kp[0]).norm(), 1e-6f);                                         // wrist
   for (size_t t = 0; t < 4; ++t) EXPECT_LT((xr[2 + t].pose.p - kp[1 + t]).norm(), 1e-6f);  // thumb
   for (size_t f = 0; f < 4; ++f) {
     for (size_t k = 0; k < 4; ++k) {
-      EXPECT_LT((xr[7 + 5 * f + k].pose.p - kp[5 + 4 * f + k]).norm(), 1e-6f) << names[7 + 5 * f + k];
+      EXPECT_LT((xr[7 + 5 * f + k].pose.p - kp[5 + 4 * f + k]).norm(), 1e-6f)
+          << names[7 + 5 * f + k];
     }
   }
   // +z is parallel to the joint's bone (the one starting at the joint) and points away from
@@ -115,7 +117,8 @@ TEST(OpenXr26, YPointsOutOfTheBackOfTheFlatHand) {
     const ModelPose rest = forwardKinematics(model, zeroAngles(model));
     const auto xr = openxr26(model, rest);
     // The flat hand's back faces +y (body frames: +y dorsal), for both hands.
-    for (size_t i = 6; i < 26; ++i) EXPECT_GT((xr[i].pose.q * Vec3::UnitY()).y(), 0.95f) << openXrJointNames()[i];
+    for (size_t i = 6; i < 26; ++i)
+      EXPECT_GT((xr[i].pose.q * Vec3::UnitY()).y(), 0.95f) << openXrJointNames()[i];
     // x = y cross z: right-handed frames.
     for (const XrJoint& j : xr) {
       const Mat3 r = j.pose.q.toRotationMatrix();
@@ -126,7 +129,10 @@ TEST(OpenXr26, YPointsOutOfTheBackOfTheFlatHand) {
 
 TEST(Keypoints21, NonHandModelHasNoHandLayout) {
   ModelSpec spec;
-  spec.bodies.push_back({"box", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, std::nullopt, std::nullopt});
+  spec.bodies.push_back({"box",
+                         {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)},
+                         std::nullopt,
+                         std::nullopt});
   const Result<ArticulatedModel> model = buildModel(spec);
   ASSERT_TRUE(model.ok()) << model.message();
   EXPECT_FALSE(model->hasKeypoints21());

@@ -19,17 +19,25 @@ const ArticulatedModel& hand() {
   return model;
 }
 
-float angleBetween(const Quat& a, const Quat& b) { return a.angularDistance(b); }
+float angleBetween(const Quat& a, const Quat& b) {
+  return a.angularDistance(b);
+}
 
 TEST(Kinematics, JointRotationIsSwingTwistInModelAxes) {
   constexpr float kHalfPi = std::numbers::pi_v<float> / 2;
   // Pure flexion: about +x; the bone (+z) turns toward -y (the palm side).
-  EXPECT_LT(angleBetween(jointRotation(Vec3(0.7f, 0, 0)), Quat(Eigen::AngleAxisf(0.7f, Vec3::UnitX()))), 1e-6f);
+  EXPECT_LT(
+      angleBetween(jointRotation(Vec3(0.7f, 0, 0)), Quat(Eigen::AngleAxisf(0.7f, Vec3::UnitX()))),
+      1e-6f);
   EXPECT_LT((jointRotation(Vec3(kHalfPi, 0, 0)) * Vec3::UnitZ() - Vec3(0, -1, 0)).norm(), 1e-6f);
   // Pure abduction: about +y; the bone turns toward +x (the thumb side of a right hand).
-  EXPECT_LT(angleBetween(jointRotation(Vec3(0, 0.4f, 0)), Quat(Eigen::AngleAxisf(0.4f, Vec3::UnitY()))), 1e-6f);
+  EXPECT_LT(
+      angleBetween(jointRotation(Vec3(0, 0.4f, 0)), Quat(Eigen::AngleAxisf(0.4f, Vec3::UnitY()))),
+      1e-6f);
   // Pure twist: about +z.
-  EXPECT_LT(angleBetween(jointRotation(Vec3(0, 0, 0.9f)), Quat(Eigen::AngleAxisf(0.9f, Vec3::UnitZ()))), 1e-6f);
+  EXPECT_LT(
+      angleBetween(jointRotation(Vec3(0, 0, 0.9f)), Quat(Eigen::AngleAxisf(0.9f, Vec3::UnitZ()))),
+      1e-6f);
   // Combined: the bone direction is (sin a, -cos a sin f, cos a cos f) whatever the twist,
   // and the twist is a rotation about the bone after the shortest swing.
   const float f = 1.2f, a = -0.35f, t = 0.5f;
@@ -121,7 +129,8 @@ TEST(PoseSequence, SaveLoadRoundTripIsExact) {
   std::mt19937 rng(6);
   PoseSequence seq;
   for (const Body& b : hand().bodies()) seq.bodyNames.push_back(b.name);
-  for (int f = 0; f < 5; ++f) seq.frames.push_back(forwardKinematics(hand(), fixtures::randomValidAngles(hand(), rng)));
+  for (int f = 0; f < 5; ++f)
+    seq.frames.push_back(forwardKinematics(hand(), fixtures::randomValidAngles(hand(), rng)));
   const std::filesystem::path path = test::scratchDir("pose_sequence") / "poses.jsonl";
   ASSERT_TRUE(savePoseSequence(seq, path).ok());
   const Result<PoseSequence> loaded = loadPoseSequence(path);
@@ -146,7 +155,9 @@ std::string poseError(const std::string& name, const std::string& text) {
 
 const char* kHeader = R"({"format": "dynahand-pose", "version": 1, "bodies": ["a", "b"]})";
 
-TEST(PoseSequenceErrors, EmptyFile) { EXPECT_EQ(poseError("e.jsonl", ""), "e.jsonl: empty pose sequence (no header line)"); }
+TEST(PoseSequenceErrors, EmptyFile) {
+  EXPECT_EQ(poseError("e.jsonl", ""), "e.jsonl: empty pose sequence (no header line)");
+}
 
 TEST(PoseSequenceErrors, WrongFormatName) {
   EXPECT_EQ(poseError("f.jsonl", R"({"format": "x", "version": 1, "bodies": ["a"]})"),
@@ -154,20 +165,23 @@ TEST(PoseSequenceErrors, WrongFormatName) {
 }
 
 TEST(PoseSequenceErrors, FrameOutOfOrder) {
-  const std::string text = std::string(kHeader) + "\n" +
-                           R"({"frame": 1, "poses": [[0,0,0,1,0,0,0],[0,0,0,1,0,0,0]]})";
-  EXPECT_EQ(poseError("o.jsonl", text), "o.jsonl:2: frame: 1, expected 0 (frames are numbered in order from 0)");
+  const std::string text =
+      std::string(kHeader) + "\n" + R"({"frame": 1, "poses": [[0,0,0,1,0,0,0],[0,0,0,1,0,0,0]]})";
+  EXPECT_EQ(poseError("o.jsonl", text),
+            "o.jsonl:2: frame: 1, expected 0 (frames are numbered in order from 0)");
 }
 
 TEST(PoseSequenceErrors, WrongBodyCount) {
-  const std::string text = std::string(kHeader) + "\n" + R"({"frame": 0, "poses": [[0,0,0,1,0,0,0]]})";
+  const std::string text =
+      std::string(kHeader) + "\n" + R"({"frame": 0, "poses": [[0,0,0,1,0,0,0]]})";
   EXPECT_EQ(poseError("c.jsonl", text), "c.jsonl:2: poses: 1 poses for 2 bodies");
 }
 
 TEST(PoseSequenceErrors, NotUnitQuaternion) {
-  const std::string text = std::string(kHeader) + "\n" +
-                           R"({"frame": 0, "poses": [[0,0,0,1,0,0,0],[0,0,0,0,0,0,0]]})";
-  EXPECT_EQ(poseError("q.jsonl", text), "q.jsonl:2: poses[1]: orientation is not a unit quaternion");
+  const std::string text =
+      std::string(kHeader) + "\n" + R"({"frame": 0, "poses": [[0,0,0,1,0,0,0],[0,0,0,0,0,0,0]]})";
+  EXPECT_EQ(poseError("q.jsonl", text),
+            "q.jsonl:2: poses[1]: orientation is not a unit quaternion");
 }
 
 TEST(PoseSequenceErrors, TruncatedLine) {
@@ -176,8 +190,8 @@ TEST(PoseSequenceErrors, TruncatedLine) {
 }
 
 TEST(PoseSequenceErrors, NaN) {
-  const std::string text = std::string(kHeader) + "\n" +
-                           R"({"frame": 0, "poses": [[NaN,0,0,1,0,0,0],[0,0,0,1,0,0,0]]})";
+  const std::string text =
+      std::string(kHeader) + "\n" + R"({"frame": 0, "poses": [[NaN,0,0,1,0,0,0],[0,0,0,1,0,0,0]]})";
   EXPECT_NE(poseError("n.jsonl", text).find("n.jsonl:2: not valid JSON"), std::string::npos);
 }
 

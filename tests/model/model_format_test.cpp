@@ -17,7 +17,9 @@ namespace {
 
 using nlohmann::json;
 
-std::filesystem::path armPath() { return std::filesystem::path(DYNAHAND_SOURCE_DIR) / "tests/model/data/three_link_arm.json"; }
+std::filesystem::path armPath() {
+  return std::filesystem::path(DYNAHAND_SOURCE_DIR) / "tests/model/data/three_link_arm.json";
+}
 
 std::string readText(const std::filesystem::path& path) {
   std::ifstream in(path);
@@ -26,7 +28,9 @@ std::string readText(const std::filesystem::path& path) {
   return s.str();
 }
 
-json armJson() { return json::parse(readText(armPath())); }
+json armJson() {
+  return json::parse(readText(armPath()));
+}
 
 // Parses a (possibly broken) document and returns the error message, or "" when it loaded.
 std::string loadError(const json& doc) {
@@ -45,8 +49,10 @@ TEST(ModelFormat, DefaultHandFileRoundTripIsByteIdentical) {
   // And the loaded model is the same model.
   ASSERT_EQ(loaded->bodyCount(), hand.bodyCount());
   for (int b = 0; b < hand.bodyCount(); ++b) {
-    EXPECT_EQ(loaded->bodies()[static_cast<size_t>(b)].mass, hand.bodies()[static_cast<size_t>(b)].mass);
-    EXPECT_EQ(loaded->bodies()[static_cast<size_t>(b)].vertices, hand.bodies()[static_cast<size_t>(b)].vertices);
+    EXPECT_EQ(loaded->bodies()[static_cast<size_t>(b)].mass,
+              hand.bodies()[static_cast<size_t>(b)].mass);
+    EXPECT_EQ(loaded->bodies()[static_cast<size_t>(b)].vertices,
+              hand.bodies()[static_cast<size_t>(b)].vertices);
   }
   for (int j = 0; j < hand.jointCount(); ++j) {
     const Joint& a = hand.joints()[static_cast<size_t>(j)];
@@ -86,8 +92,10 @@ TEST(ModelFormat, ArmForwardKinematicsMatchesClosedForm) {
   const ModelPose pose = forwardKinematics(*arm, angles);
   const Vec3 tip = pose.bodies[3].transform(Vec3(0, 0, 0.15f));
   // Planar chain in the y-z plane; flexion about +x turns +z toward -y.
-  const float z = 0.02f + 0.3f * std::cos(a1) + 0.25f * std::cos(a1 + a2) + 0.15f * std::cos(a1 + a2 + a3);
-  const float y = -(0.3f * std::sin(a1) + 0.25f * std::sin(a1 + a2) + 0.15f * std::sin(a1 + a2 + a3));
+  const float z =
+      0.02f + 0.3f * std::cos(a1) + 0.25f * std::cos(a1 + a2) + 0.15f * std::cos(a1 + a2 + a3);
+  const float y =
+      -(0.3f * std::sin(a1) + 0.25f * std::sin(a1 + a2) + 0.15f * std::sin(a1 + a2 + a3));
   EXPECT_NEAR(tip.x(), 0.0f, 1e-6f);
   EXPECT_NEAR(tip.y(), y, 1e-5f);
   EXPECT_NEAR(tip.z(), z, 1e-5f);
@@ -96,7 +104,8 @@ TEST(ModelFormat, ArmForwardKinematicsMatchesClosedForm) {
 TEST(ModelFormatErrors, MissingFile) {
   const Result<ArticulatedModel> m = loadModel("/nonexistent/model.json");
   ASSERT_FALSE(m.ok());
-  EXPECT_NE(m.message().find("/nonexistent/model.json: cannot open"), std::string::npos) << m.message();
+  EXPECT_NE(m.message().find("/nonexistent/model.json: cannot open"), std::string::npos)
+      << m.message();
 }
 
 TEST(ModelFormatErrors, TruncatedFile) {
@@ -164,17 +173,21 @@ TEST(ModelFormatErrors, VertexNotATriple) {
 
 TEST(ModelFormatErrors, FewerThanFourVertices) {
   json doc = armJson();
-  doc["bodies"][3]["vertices"] = json::array({json::array({0, 0, 0}), json::array({1, 0, 0}), json::array({0, 1, 0})});
+  doc["bodies"][3]["vertices"] =
+      json::array({json::array({0, 0, 0}), json::array({1, 0, 0}), json::array({0, 1, 0})});
   const std::string error = loadError(doc);
-  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: fewer than 4 non-coplanar points (", 0), 0u) << error;
+  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: fewer than 4 non-coplanar points (", 0), 0u)
+      << error;
 }
 
 TEST(ModelFormatErrors, CoplanarVertices) {
   json doc = armJson();
-  doc["bodies"][5 - 2]["vertices"] = json::array(
-      {json::array({0, 0, 0}), json::array({0.1, 0, 0}), json::array({0, 0.1, 0}), json::array({0.1, 0.1, 0})});
+  doc["bodies"][5 - 2]["vertices"] =
+      json::array({json::array({0, 0, 0}), json::array({0.1, 0, 0}), json::array({0, 0.1, 0}),
+                   json::array({0.1, 0.1, 0})});
   const std::string error = loadError(doc);
-  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: fewer than 4 non-coplanar points (", 0), 0u) << error;
+  EXPECT_EQ(error.rfind("test.json: bodies[3].vertices: fewer than 4 non-coplanar points (", 0), 0u)
+      << error;
 }
 
 TEST(ModelFormatErrors, NonConvexPointSetIsHulled) {
@@ -221,14 +234,16 @@ TEST(ModelFormatErrors, TwoRoots) {
   json doc = armJson();
   doc["joints"].erase(2);
   const std::string error = loadError(doc);
-  EXPECT_NE(error.find("2 bodies have no parent joint ('base', 'hand')"), std::string::npos) << error;
+  EXPECT_NE(error.find("2 bodies have no parent joint ('base', 'hand')"), std::string::npos)
+      << error;
 }
 
 TEST(ModelFormatErrors, BodyWithTwoParents) {
   json doc = armJson();
   doc["joints"][2]["parent"] = "base";
   doc["joints"][2]["child"] = "lower";
-  EXPECT_EQ(loadError(doc), "test.json: joints[2].child: body 'lower' is already the child of joints[1]");
+  EXPECT_EQ(loadError(doc),
+            "test.json: joints[2].child: body 'lower' is already the child of joints[1]");
 }
 
 TEST(ModelFormatErrors, MinAngleAboveMax) {
@@ -240,7 +255,8 @@ TEST(ModelFormatErrors, MinAngleAboveMax) {
 TEST(ModelFormatErrors, AbductionLimitAtNinetyDegrees) {
   json doc = armJson();
   doc["joints"][0]["maxDeg"][1] = 90;
-  EXPECT_EQ(loadError(doc), "test.json: joints[0].maxDeg[1]: abduction limits must lie inside (-90, 90) degrees");
+  EXPECT_EQ(loadError(doc),
+            "test.json: joints[0].maxDeg[1]: abduction limits must lie inside (-90, 90) degrees");
 }
 
 TEST(ModelFormatErrors, FrameNotUnit) {

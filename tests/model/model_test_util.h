@@ -15,7 +15,8 @@ inline JointAngles randomValidAngles(const ArticulatedModel& model, std::mt19937
   for (size_t j = 0; j < angles.angles.size(); ++j) {
     const Joint& joint = model.joints()[j];
     for (int axis = 0; axis < 3; ++axis) {
-      angles.angles[j][axis] = joint.minAngle[axis] + unit(rng) * (joint.maxAngle[axis] - joint.minAngle[axis]);
+      angles.angles[j][axis] =
+          joint.minAngle[axis] + unit(rng) * (joint.maxAngle[axis] - joint.minAngle[axis]);
     }
   }
   const Vec3 axis = Vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f).normalized();
@@ -26,8 +27,8 @@ inline JointAngles randomValidAngles(const ArticulatedModel& model, std::mt19937
 
 // Whether two bodies at these poses interpenetrate deeper than `margin` (m), judged by the
 // vertices of each inside the other (enough for the rounded shapes used here).
-inline bool overlaps(const physics::ConvexShape& a, const Pose& poseA, const physics::ConvexShape& b,
-                     const Pose& poseB, float margin) {
+inline bool overlaps(const physics::ConvexShape& a, const Pose& poseA,
+                     const physics::ConvexShape& b, const Pose& poseB, float margin) {
   for (const Vec3& v : a.vertices()) {
     if (b.signedDistance(poseB.inverseTransform(poseA.transform(v))) < -margin) return true;
   }

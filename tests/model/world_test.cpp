@@ -13,7 +13,9 @@
 namespace dynahand::model {
 namespace {
 
-std::filesystem::path armPath() { return std::filesystem::path(DYNAHAND_SOURCE_DIR) / "tests/model/data/three_link_arm.json"; }
+std::filesystem::path armPath() {
+  return std::filesystem::path(DYNAHAND_SOURCE_DIR) / "tests/model/data/three_link_arm.json";
+}
 
 TEST(ModelWorld, JointRotationIsThePhysicsConventionInModelAxes) {
   std::mt19937 rng(1);
@@ -23,7 +25,11 @@ TEST(ModelWorld, JointRotationIsThePhysicsConventionInModelAxes) {
     const Vec3 a(angle(rng), angle(rng), angle(rng));
     const Quat physics = c * physics::composeJointRotation(toPhysicsAngles(a)) * c.conjugate();
     EXPECT_LT(jointRotation(a).angularDistance(physics), 1e-5f);
-    EXPECT_LT((fromPhysicsAngles(physics::decomposeJointRotation(c.conjugate() * jointRotation(a) * c)) - a).norm(), 1e-4f);
+    EXPECT_LT(
+        (fromPhysicsAngles(physics::decomposeJointRotation(c.conjugate() * jointRotation(a) * c)) -
+         a)
+            .norm(),
+        1e-4f);
   }
 }
 
@@ -51,7 +57,8 @@ TEST(ModelWorld, ArmModelFromAFileSimulatesUnderGravity) {
     for (size_t j = 0; j < ids.joints.size(); ++j) {
       ASSERT_LT(world.jointSeparation(ids.joints[j]), 0.005f) << "step " << step;
       // The world's angles and the model's angles of the same poses agree.
-      EXPECT_LT((fromPhysicsAngles(world.jointAngles(ids.joints[j])) - angles.angles[j]).norm(), 1e-3f);
+      EXPECT_LT((fromPhysicsAngles(world.jointAngles(ids.joints[j])) - angles.angles[j]).norm(),
+                1e-3f);
     }
     ASSERT_TRUE(withinLimits(*arm, angles, 0.05f)) << "step " << step;
   }
@@ -72,14 +79,16 @@ TEST(ModelWorld, DefaultHandRestsWithoutContactsPushingItApart) {
   for (int step = 0; step < 30; ++step) world.step(1.0f / 60.0f);
   readPose(world, ids, pose);
   // Random valid poses can press fingers together, so allow small settling; nothing flies.
-  for (size_t b = 0; b < pose.bodies.size(); ++b) EXPECT_LT((pose.bodies[b].p - start.bodies[b].p).norm(), 0.01f);
+  for (size_t b = 0; b < pose.bodies.size(); ++b)
+    EXPECT_LT((pose.bodies[b].p - start.bodies[b].p).norm(), 0.01f);
   // At rest, nothing collides: the flat hand does not move at all.
   physics::World flat;
   const ModelPose rest = forwardKinematics(hand, zeroAngles(hand));
   const ModelInWorld flatIds = addToWorld(flat, hand, rest);
   for (int step = 0; step < 30; ++step) flat.step(1.0f / 60.0f);
   readPose(flat, flatIds, pose);
-  for (size_t b = 0; b < pose.bodies.size(); ++b) EXPECT_LT((pose.bodies[b].p - rest.bodies[b].p).norm(), 1e-4f);
+  for (size_t b = 0; b < pose.bodies.size(); ++b)
+    EXPECT_LT((pose.bodies[b].p - rest.bodies[b].p).norm(), 1e-4f);
 }
 
 }  // namespace

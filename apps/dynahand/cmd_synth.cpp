@@ -38,7 +38,11 @@ const CommandRegistration kRegistration{Command{
       synth::SynthOptions& o = flags->options;
       sub.add_option("--motion", o.clip, "clip name (see --list)")->capture_default_str();
       sub.add_option("--pose-file", o.poseFile,
-                     "play a pose JSONL file (docs/formats/pose.md) instead of a clip")
+                     "play poses instead of a clip: a pose JSONL (docs/formats/pose.md) or the "
+                     "original authors' .pose (e.g. animbank.pose)")
+          ->check(CLI::ExistingFile);
+      sub.add_option("--intel-model", o.intelModelFile,
+                     "the authors' model_hand.json for a .pose file (default: beside it)")
           ->check(CLI::ExistingFile);
       sub.add_option("--profile", o.profile,
                      "sensor profile: ideal, tof, structured-light, active-stereo")

@@ -76,9 +76,14 @@ struct Scene {
 // ---- Sequences ----
 
 struct SynthOptions {
-  std::string clip = "wave";       // a clips() name; ignored when poseFile is set
-  std::filesystem::path poseFile;  // optional: play a pose JSONL (model::loadPoseSequence) instead
-  std::string profile = "tof";     // a sensorProfiles() name
+  std::string clip = "wave";  // a clips() name; ignored when poseFile is set
+  // Optional: play poses instead of a clip, retargeted to the default hand at `hand` size:
+  // a pose JSONL of the default hand (docs/formats/pose.md; joint angles carried over) or
+  // the original authors' .pose (their model's 21 keypoints fitted by model::KeypointFitter).
+  // Frames past the file's end wrap around. Poses keep the file's camera placement.
+  std::filesystem::path poseFile;
+  std::filesystem::path intelModelFile;  // for .pose; empty = model_hand.json beside it
+  std::string profile = "tof";           // a sensorProfiles() name
   int frameCount = 300;
   float framesPerSecond = 30.0f;
   float speed = 1.0f;      // clip time multiplier

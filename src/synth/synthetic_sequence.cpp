@@ -6,6 +6,8 @@
 #include <string>
 
 #include "clip_library.h"
+#include "dynahand/model_fit.h"
+#include "dynahand/model_intel.h"
 #include "dynahand/synth.h"
 #include "scene.h"
 
@@ -36,6 +38,44 @@ Status validate(const SynthOptions& o) {
   return Ok{};
 }
 
+// Joint angles of the default hand for each pose of a pose file (at most `frameCount`).
+Result<std::vector<model::JointAngles>> loadPlayback(const SynthOptions& o,
+                                                     const model::ArticulatedModel& hand) {
+  std::vector<model::JointAngles> angles;
+  const std::string name = o.poseFile.string();
+  if (o.poseFile.extension() == ".pose") {
+    const std::filesystem::path modelPath =
+        o.intelModelFile.empty() ? o.poseFile.parent_path() / "model_hand.json" : o.intelModelFile;
+    Result<model::IntelModel> intel = model::importIntelModel(modelPath);
+    if (!intel) return Error{name + ": needs the authors' hand model: " + intel.message()};
+    if (!intel->model.hasKeypoints21())
+      return Error{modelPath.string() + ": the model has no 21 hand keypoints"};
+    Result<std::vector<model::ModelPose>> poses = model::loadIntelPoses(o.poseFile, intel->model);
+    if (!poses) return poses.error();
+    if (poses->empty()) return Error{name + ": no poses"};
+    // Retarget by fitting our hand to their keypoints, each fit starting from the last.
+    model::KeypointFitter fitter(hand);
+    const std::size_t count = std::min(poses->size(), static_cast<std::size_t>(o.frameCount));
+    for (std::size_t i = 0; i < count; ++i) {
+      model::FitOptions fit;
+      if (!angles.empty()) fit.initial = &angles.back();
+      Result<model::FitResult> r = fitter.fit21(model::keypoints21(intel->model, (*poses)[i]), fit);
+      if (!r) return Error{name + ": pose " + std::to_string(i) + ": " + r.message()};
+      angles.push_back(std::move(r->angles));
+    }
+    return angles;
+  }
+  Result<model::PoseSequence> poses = model::loadPoseSequence(o.poseFile);
+  if (!poses) return poses.error();
+  if (poses->frames.empty()) return Error{name + ": no poses"};
+  if (Status s = model::checkPoseSequence(*poses, hand); !s)
+    return Error{name + ": " + s.message()};
+  // Same bodies and joints: the joint angles carry over to a hand of another size.
+  for (const model::ModelPose& pose : poses->frames)
+    angles.push_back(model::jointAngles(hand, pose));
+  return angles;
+}
+
 }  // namespace
 
 struct SyntheticSequence::State {
@@ -43,8 +83,8 @@ struct SyntheticSequence::State {
   SensorProfile profile;
   std::vector<model::ArticulatedModel> models;  // per hand
   const detail::ClipDefinition* clip = nullptr;
-  model::PoseSequence poseFile;  // frames played when options.poseFile is set
-  Pose rest;                     // right hand's rest placement, camera frame
+  std::vector<model::JointAngles> playback;  // (frames) when options.poseFile is set
+  Pose rest;                                 // right hand's rest placement, camera frame
   float surfaceScale = 1.0f;
   DepthRenderer renderer;
   SensorSimulator sensor;
@@ -58,12 +98,10 @@ struct SyntheticSequence::State {
 
   // Joint angles of hand h at frame `index`, root in the camera frame.
   void anglesAt(int index, std::vector<HandMotionSample>& out) const {
-    if (!options.poseFile.empty()) {
+    if (!playback.empty()) {
       out.resize(1);
       out[0].side = model::Side::Right;
-      const auto& poses = poseFile.frames;
-      out[0].angles =
-          model::jointAngles(models[0], poses[static_cast<std::size_t>(index) % poses.size()]);
+      out[0].angles = playback[static_cast<std::size_t>(index) % playback.size()];
       return;
     }
     const float time = static_cast<float>(index) / options.framesPerSecond * options.speed;
@@ -107,12 +145,9 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
   if (handCount == 2)
     state->models.push_back(model::makeDefaultHand(options.hand, model::Side::Left));
   if (!options.poseFile.empty()) {
-    Result<model::PoseSequence> poses = model::loadPoseSequence(options.poseFile);
-    if (!poses) return poses.error();
-    if (poses->frames.empty()) return Error{options.poseFile.string() + ": no poses"};
-    if (Status s = model::checkPoseSequence(*poses, state->models[0]); !s)
-      return Error{options.poseFile.string() + ": " + s.message()};
-    state->poseFile = std::move(poses).value();
+    Result<std::vector<model::JointAngles>> played = loadPlayback(options, state->models[0]);
+    if (!played) return played.error();
+    state->playback = std::move(played).value();
   }
 
   const float handDistance = detail::resolvedHandDistance(options.scene, state->profile);

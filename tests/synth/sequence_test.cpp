@@ -235,6 +235,37 @@ TEST(SyntheticSequence, PoseFilePlaybackReproducesTheRecordedPoses) {
   }
 }
 
+TEST(SyntheticSequence, PlaysTheAuthorsAnimbankRetargetedToOurHand) {
+  DYNAHAND_REQUIRE_SHARED_DATA(data);
+  SynthOptions o = optionsFor("", "tof", 4);
+  o.poseFile = data / "intel" / "animbank.pose";
+  Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+  ASSERT_TRUE(seq.ok()) << seq.message();
+  const Intrinsics& k = seq->intrinsics();
+  for (int f = 0; f < 4; ++f) {
+    const SyntheticFrame& frame = seq->frame(f);
+    int inside = 0;
+    for (const Vec3& p : frame.hands[0].keypoints) {
+      const Vec2 uv = k.project(p);
+      if (!k.contains(uv.x(), uv.y())) continue;
+      const std::size_t i = static_cast<std::size_t>(std::lround(uv.y())) * k.width +
+                            static_cast<std::size_t>(std::lround(uv.x()));
+      inside += seq->labels()[i] == PixelLabel::Hand0;
+    }
+    EXPECT_EQ(inside, 21) << "frame " << f;
+  }
+}
+
+TEST(SyntheticSequence, AuthorsPoseFileWithoutTheirModelIsAnError) {
+  const std::filesystem::path dir = test::scratchDir("synth_pose_no_model");
+  std::ofstream(dir / "one.pose") << "0 0 0.4 0 0 0 1\n";
+  SynthOptions o = optionsFor("", "tof", 4);
+  o.poseFile = dir / "one.pose";
+  const Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+  ASSERT_FALSE(seq.ok());
+  EXPECT_NE(seq.message().find("model_hand.json"), std::string::npos) << seq.message();
+}
+
 TEST(SyntheticSequence, WrittenSequenceReadsBackWithGroundTruthAndPoses) {
   const std::filesystem::path dir = test::scratchDir("synth_write") / "seq";
   Result<SyntheticSequence> seq = SyntheticSequence::create(optionsFor("two-hands", "tof", 6));

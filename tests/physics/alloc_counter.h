@@ -10,6 +10,8 @@ class AllocationCounter {
   AllocationCounter(const AllocationCounter&) = delete;
   AllocationCounter& operator=(const AllocationCounter&) = delete;
   long count() const;  // allocations since construction
+  // False under AddressSanitizer, which owns operator new (the counter is then not installed).
+  static bool supported();
 };
 
 }  // namespace dynahand::test

@@ -64,6 +64,12 @@ int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
   return best;
 }
 
+namespace {
+// Largest depth step toward the camera still taken as part of the same hand (m): a
+// fist's fingers stand up to about this far in front of the palm.
+constexpr float kMaxOccluderStepM = 0.06f;
+}  // namespace
+
 GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radiusM) {
   assert(seed >= 0 && static_cast<std::size_t>(seed) < labels_.size());
   const int w = grid_.width;
@@ -128,9 +134,15 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
     const auto visit = [&](int n, int ni, int nj, float limit) {
       if (visited[n] == stamp) return;
       const float zn = depth[n];
-      if (zn == 0.0f || std::fabs(zn - z) > limit) return;
+      if (zn == 0.0f) return;
+      // A surface in front of this one, close behind it in depth, occludes it: a finger
+      // curled in front of the palm or a thumb across it. It belongs to the same volume
+      // even across a depth step (the step rule only stops steps away from the camera),
+      // and even if it was passed over before as too small on its own.
+      const bool occluder = zn < z && z - zn <= kMaxOccluderStepM;
+      if (!occluder && std::fabs(zn - z) > limit) return;
       const std::uint8_t label = labels[n];
-      if (label != kFree) {
+      if (label != kFree && !(label == kTried && occluder)) {
         // Connected to an accepted region or its cut: this is not a separate volume.
         touches |= label != kTried;
         return;

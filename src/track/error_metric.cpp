@@ -15,8 +15,8 @@ bool inFreeSpace(const Vec3& point, const DepthFrame& depth, const Intrinsics& i
   return raw == 0 || depth.metres(u, v) >= point.z();
 }
 
-void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const DepthFrame& depth,
-                  const Intrinsics& intrinsics, ErrorBreakdown& out) {
+void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const FreeSpaceTest& isFree,
+                  ErrorBreakdown& out) {
   const auto n = static_cast<std::size_t>(bodies.size());
   out.fit.assign(n, 0.0f);
   out.occlusion.assign(n, 0.0f);
@@ -32,7 +32,7 @@ void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const
   out.occlusionTotal = 0.0f;
   for (std::size_t i = 0; i < n; ++i) {
     const int body = static_cast<int>(i);
-    if (inFreeSpace(bodies.worldCentroid(body), depth, intrinsics)) {
+    if (isFree(bodies.worldCentroid(body))) {
       out.occlusion[i] = bodies.shape(body).inscribedRadius();
     }
     out.fitTotal += out.fit[i];

@@ -8,6 +8,7 @@
 // A centroid projecting outside the image adds nothing: there is no evidence there.
 #pragma once
 
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -25,9 +26,11 @@ struct ErrorBreakdown {
   float total = 0.0f;            // m
 };
 
-// depth: the (filtered) depth image the points came from; intrinsics its camera.
-void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const DepthFrame& depth,
-                  const Intrinsics& intrinsics, ErrorBreakdown& out);
+// isFree(p): whether the camera saw the space at p (camera frame) to be empty, e.g.
+// CloudFrame::isFree or inFreeSpace below.
+using FreeSpaceTest = std::function<bool(const Vec3&)>;
+void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const FreeSpaceTest& isFree,
+                  ErrorBreakdown& out);
 
 // True when the pixel under `point` shows background farther than it or no data,
 // i.e. the point sits in space the camera saw to be empty. False outside the image.

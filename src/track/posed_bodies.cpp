@@ -14,6 +14,25 @@ void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes, std::
   poses_.assign(poses.begin(), poses.end());
   centroids_.resize(shapes.size());
   radii_.resize(shapes.size());
+  if (tableShapes_ != shapes_) {  // plane tables are rebuilt only when the shapes change
+    tableShapes_ = shapes_;
+    planes_.resize(shapes.size());
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+      const auto& faces = shapes_[i]->faces();
+      const std::size_t padded = (faces.size() + 7) / 8 * 8;
+      PlaneTable& t = planes_[i];
+      t.nx.assign(padded, 0.0f);
+      t.ny.assign(padded, 0.0f);
+      t.nz.assign(padded, 0.0f);
+      t.offset.assign(padded, 1e30f);  // padding: distance -1e30, never the largest
+      for (std::size_t f = 0; f < faces.size(); ++f) {
+        t.nx[f] = faces[f].normal.x();
+        t.ny[f] = faces[f].normal.y();
+        t.nz[f] = faces[f].normal.z();
+        t.offset[f] = faces[f].offset;
+      }
+    }
+  }
   for (std::size_t i = 0; i < shapes.size(); ++i) {
     radii_[i] = shapes_[i]->boundingRadius();
     centroids_[i] = poses_[i].transform(shapes_[i]->centroid());
@@ -26,10 +45,45 @@ void PosedBodies::setPose(int body, const Pose& pose) {
   centroids_[i] = pose.transform(shapes_[i]->centroid());
 }
 
-SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
+float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face) {
+  // Eight independent lanes (maximum and its face per lane) so the compiler vectorises
+  // the loop without reassociating floats; the lanes are reduced at the end.
+  const std::size_t n = t.offset.size();
+  const float* nx = t.nx.data();
+  const float* ny = t.ny.data();
+  const float* nz = t.nz.data();
+  const float* o = t.offset.data();
+  const float qx = q.x(), qy = q.y(), qz = q.z();
+  float best[8];
+  int index[8];
+  for (int k = 0; k < 8; ++k) {
+    best[k] = -1e30f;
+    index[k] = 0;
+  }
+  for (std::size_t f = 0; f < n; f += 8) {
+    for (int k = 0; k < 8; ++k) {
+      const std::size_t i = f + static_cast<std::size_t>(k);
+      const float d = nx[i] * qx + ny[i] * qy + nz[i] * qz - o[i];
+      const bool better = d > best[k];
+      best[k] = better ? d : best[k];
+      index[k] = better ? static_cast<int>(i) : index[k];
+    }
+  }
+  float result = best[0];
+  int which = index[0];
+  for (int k = 1; k < 8; ++k) {
+    if (best[k] > result || (best[k] == result && index[k] < which)) {
+      result = best[k];
+      which = index[k];
+    }
+  }
+  *face = which;
+  return result;
+}
+
+int PosedBodies::sortedBounds(const Vec3& p, BodyMask mask, std::pair<float, int>* order) const {
   // Lower bounds on the distance to each allowed body, sorted ascending (insertion
   // sort: at most 32 entries, stable so ties keep body order).
-  std::array<std::pair<float, int>, 32> order;
   int count = 0;
   for (int i = 0; i < size(); ++i) {
     if (!(mask >> i & 1u)) continue;
@@ -42,6 +96,40 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
     }
     order[static_cast<std::size_t>(k)] = {bound, i};
   }
+  return count;
+}
+
+SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) const {
+  SurfaceHit best;
+  best.distance = std::numeric_limits<float>::infinity();
+  auto test = [&](int i) {
+    const auto bi = static_cast<std::size_t>(i);
+    const Vec3 local = poses_[bi].inverseTransform(p);
+    int face = 0;
+    const float sd = maxPlaneDistance(planes_[bi], local, &face);
+    // Outside, the bounding-sphere bound is also a lower bound on the exact distance; taking
+    // the larger keeps the sphere culling below consistent (the answer is order-free).
+    const float d = sd < 0.0f ? -sd : std::max(sd, (p - centroids_[bi]).norm() - radii_[bi]);
+    if (d < best.distance || (d == best.distance && i < best.body)) {
+      const auto& f = shapes_[bi]->faces()[static_cast<std::size_t>(face)];
+      best = {i, face, d, sd, local - f.normal * sd};
+    }
+  };
+  // The hint (usually last pass's body) gives a tight bound first; every other body is
+  // tested only when its bounding sphere comes closer than the best distance so far.
+  if (hint >= 0 && hint < size() && (mask >> hint & 1u)) test(hint);
+  for (int i = 0; i < size(); ++i) {
+    if (!(mask >> i & 1u) || i == hint) continue;
+    const float reach = best.distance + radii_[static_cast<std::size_t>(i)];
+    if ((p - centroids_[static_cast<std::size_t>(i)]).squaredNorm() >= reach * reach) continue;
+    test(i);
+  }
+  return best;
+}
+
+SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
+  std::array<std::pair<float, int>, 32> order;
+  const int count = sortedBounds(p, mask, order.data());
   SurfaceHit best;
   best.distance = std::numeric_limits<float>::infinity();
   for (int k = 0; k < count; ++k) {
@@ -49,6 +137,9 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
     if (bound > best.distance) break;
     const Pose& pose = poses_[static_cast<std::size_t>(i)];
     const Vec3 local = pose.inverseTransform(p);
+    int planeFace = 0;
+    // Outside, the exact distance is at least the largest plane distance.
+    if (maxPlaneDistance(planes_[static_cast<std::size_t>(i)], local, &planeFace) > best.distance) continue;
     Vec3 closest;
     int face = -1;
     const float sd = shapes_[static_cast<std::size_t>(i)]->query(local, &closest, &face);

@@ -36,12 +36,33 @@ class PosedBodies {
   Vec3 worldCentroid(int body) const { return centroids_[static_cast<std::size_t>(body)]; }
 
   // The body whose surface is nearest to p (world), among the bodies in mask. Exact:
-  // bodies are tried in order of a bounding-sphere lower bound and skipped once that
-  // bound exceeds the best distance found. Ties go to the lower body index.
+  // bodies are tried in order of a bounding-sphere lower bound, then of the face-plane
+  // bound below, and skipped once a bound exceeds the best distance found. Ties go to
+  // the lower body index.
   SurfaceHit nearest(const Vec3& p, BodyMask mask = kAllBodies) const;
 
+  // The fast variant the surface constraints use: the distance to a body is its largest
+  // face-plane distance (exact inside a body and wherever the foot of the perpendicular
+  // lies on that face, a lower bound elsewhere; outside, at least the bounding-sphere
+  // bound), the face is that plane's, and
+  // localPoint is p's projection onto it (a point of the face plane: all a point-to-plane
+  // row needs). About ten times cheaper than nearest(). hint: a body likely to be the
+  // answer (e.g. last pass's), tried first to cull the others; -1 for none. The result
+  // does not depend on the hint except on exact ties.
+  SurfaceHit nearestPlanar(const Vec3& p, BodyMask mask = kAllBodies, int hint = -1) const;
+
  private:
+  // Face planes of one shape as SoA, padded to a multiple of 8 with planes that never win.
+  struct PlaneTable {
+    std::vector<float> nx, ny, nz, offset;
+  };
+  // Largest plane distance of local point q and its face.
+  static float maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face);
+  int sortedBounds(const Vec3& p, BodyMask mask, std::pair<float, int>* order) const;
+
   std::vector<const physics::ConvexShape*> shapes_;
+  std::vector<const physics::ConvexShape*> tableShapes_;  // shapes the tables were built for
+  std::vector<PlaneTable> planes_;
   std::vector<Pose> poses_;
   std::vector<Vec3> centroids_;    // world centroid of each body
   std::vector<float> radii_;       // bounding radius about the centroid

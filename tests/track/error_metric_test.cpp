@@ -84,7 +84,7 @@ TEST(ErrorMetric, MatchesBruteForceOnRandomPoses) {
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
     ErrorBreakdown err;
-    computeError(bodies, s.points, s.depth, s.intrinsics, err);
+    computeError(bodies, s.points, [&](const Vec3& c) { return inFreeSpace(c, s.depth, s.intrinsics); }, err);
 
     std::vector<float> fit(s.shapes.size(), 0.0f);
     for (const Vec3& p : s.points) {
@@ -127,17 +127,17 @@ TEST(ErrorMetric, PerfectFitHasNoFitError) {
   DepthFrame depth(64, 48, 0.001f);
   for (auto& d : depth.depth) d = 480;  // the box's front face occludes its centroid
   ErrorBreakdown err;
-  computeError(bodies, pts, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}, err);
+  computeError(bodies, pts, [&](const Vec3& c) { return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}); }, err);
   EXPECT_NEAR(err.total, 0.0f, 1e-6f);
   EXPECT_EQ(err.pointCount[0], 81);
   // Move the box 1 cm back: every point is 1 cm off and the centroid still occluded.
   bodies.setPose(0, {Vec3(0, 0, 0.51f), Quat::Identity()});
-  computeError(bodies, pts, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}, err);
+  computeError(bodies, pts, [&](const Vec3& c) { return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}); }, err);
   EXPECT_NEAR(err.fit[0], 0.01f, 1e-5f);
   EXPECT_FLOAT_EQ(err.occlusion[0], 0.0f);
   // Nothing seen at the centroid's pixel (no data): penalty = inscribed radius (2 cm).
   for (auto& d : depth.depth) d = 0;
-  computeError(bodies, pts, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}, err);
+  computeError(bodies, pts, [&](const Vec3& c) { return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}); }, err);
   EXPECT_NEAR(err.occlusion[0], 0.02f, 1e-6f);
 }
 
@@ -155,6 +155,39 @@ TEST(PosedBodies, MaskRestrictsMatching) {
   EXPECT_EQ(only1.body, 1);
   EXPECT_GT(only1.distance, 0.08f);
   EXPECT_EQ(bodies.nearest(p, 0).body, -1);
+}
+
+}  // namespace
+}  // namespace dynahand::track
+
+namespace dynahand::track {
+namespace {
+
+TEST(PosedBodies, PlanarQueryIsExactInsideAndALowerBoundOutside) {
+  Scene s = randomScene(5);
+  PosedBodies bodies;
+  bodies.set(s.shapePtrs, s.poses);
+  int inside = 0;
+  for (const Vec3& p : s.points) {
+    for (int hint : {-1, 0, 3}) {
+      const SurfaceHit exact = bodies.nearest(p);
+      const SurfaceHit planar = bodies.nearestPlanar(p, kAllBodies, hint);
+      ASSERT_GE(planar.body, 0);
+      EXPECT_LE(planar.distance, exact.distance + 1e-6f);
+      // The planar anchor lies on the chosen face's plane, body frame.
+      const auto& face = bodies.shape(planar.body).faces()[static_cast<std::size_t>(planar.face)];
+      EXPECT_NEAR(face.normal.dot(planar.localPoint), face.offset, 1e-5f);
+      if (exact.signedDistance < 0.0f) {
+        ++inside;
+        EXPECT_NEAR(planar.distance, exact.distance, 1e-5f);
+      }
+    }
+  }
+  // The planar answer does not depend on the hint.
+  for (const Vec3& p : s.points) {
+    EXPECT_EQ(bodies.nearestPlanar(p, kAllBodies, -1).body, bodies.nearestPlanar(p, kAllBodies, 2).body);
+  }
+  EXPECT_GT(inside, 0);
 }
 
 }  // namespace

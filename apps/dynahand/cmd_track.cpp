@@ -1,0 +1,193 @@
+// dynahand track: tracks a recording and writes poses (JSON lines / CSV / BVH).
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "dynahand/command.h"
+#include "dynahand/metrics.h"
+#include "dynahand/model_pose.h"
+#include "dynahand/progress.h"
+#include "dynahand/sequence.h"
+#include "dynahand/track_io.h"
+#include "dynahand/tracker.h"
+
+namespace dynahand::cli {
+namespace {
+
+struct TrackOptions {
+  std::string input, out, csv, bvh, modelFile, init = "auto";
+  float handLength = 0.19f, handWidth = 0.085f;
+  int hands = 1, threads = 1, start = 0, frames = -1;
+  bool perFrame = false, candidates = false;
+  std::vector<std::string> disable;
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
+}
+
+int runTrack(const TrackOptions& o) {
+  if (o.input.rfind("camera:", 0) == 0) {
+    throw UsageError("live cameras: record with 'dynahand record' first, then track the recording");
+  }
+  if (!std::filesystem::exists(o.input)) throw UsageError("input not found: " + o.input);
+  auto reader = SequenceReader::open(o.input);
+  if (!reader) throw UsageError(reader.message());
+  const SequenceInfo& info = reader->info();
+
+  std::optional<model::ArticulatedModel> hand;
+  if (!o.modelFile.empty()) {
+    auto loaded = model::loadModel(o.modelFile);
+    if (!loaded) throw UsageError(loaded.message());
+    hand = std::move(*loaded);
+  } else {
+    hand = model::makeDefaultHand({o.handLength, o.handWidth});
+  }
+
+  track::TrackerSettings settings;
+  settings.hands = o.hands;
+  settings.perFrame = o.perFrame;
+  for (const auto& name : o.disable) {
+    bool found = false;
+    for (int k = 0; k < track::kStrategyCount; ++k) {
+      if (name == track::strategyName(static_cast<track::StrategyKind>(k))) {
+        settings.strategies[static_cast<std::size_t>(k)] = false;
+        found = true;
+      }
+    }
+    if (!found) throw UsageError("--disable: unknown simulation '" + name + "'");
+  }
+  auto tracker = track::Tracker::create(*hand, info.intrinsics, settings);
+  if (!tracker) throw std::runtime_error(tracker.message());
+
+  const int first = std::clamp(o.start, 0, info.frameCount);
+  const int last = o.frames < 0 ? info.frameCount : std::min(info.frameCount, first + o.frames);
+  if (o.init == "gt") {
+    const auto gt = reader->groundTruth(first);
+    if (!gt) throw UsageError("--init gt: " + o.input + " has no ground truth for frame " + std::to_string(first));
+    const Status s = (*tracker)->initializeFromKeypoints(*gt);
+    if (!s) throw std::runtime_error("--init gt: " + s.message());
+  } else if (o.init != "auto") {
+    auto poses = model::loadPoseSequence(o.init);
+    if (!poses) throw UsageError("--init: " + poses.message());
+    if (poses->frames.empty()) throw UsageError("--init: " + o.init + " holds no pose");
+    const Status s = model::checkPoseSequence(*poses, *hand);
+    if (!s) throw UsageError("--init: " + s.message());
+    (*tracker)->initialize(poses->frames.front());
+  }
+
+  io::JsonOptions json;
+  json.candidates = o.candidates;
+  std::unique_ptr<io::TrackWriter> writer, csv;
+  if (!o.out.empty()) {
+    auto w = io::TrackWriter::create(o.out, *hand, json);
+    if (!w) throw UsageError(w.message());
+    writer = std::move(*w);
+  }
+  if (!o.csv.empty()) {
+    auto w = io::TrackWriter::create(o.csv, *hand, json);
+    if (!w) throw UsageError(w.message());
+    csv = std::move(*w);
+  }
+  std::optional<io::BvhWriter> bvh;
+  if (!o.bvh.empty()) bvh.emplace(*hand, info.framesPerSecond);
+
+  installInterruptHandler();
+  Progress progress("track", last - first);
+  std::vector<double> times;
+  eval::SequenceKeypoints accuracy;
+  accuracy.fps = info.framesPerSecond;
+  int trackedFrames = 0;
+  int done = 0;
+  model::ModelPose lastPose;
+  for (int f = first; f < last && !interrupted(); ++f) {
+    auto frame = reader->frame(f);
+    if (!frame) throw std::runtime_error(frame.message());
+    const track::TrackResult& r = (*tracker)->track(*frame);
+    times.push_back(r.timeMs);
+    const auto& h = r.hands.front();
+    trackedFrames += h.tracked ? 1 : 0;
+    if (writer) {
+      const Status s = writer->write(r);
+      if (!s) throw std::runtime_error(s.message());
+    }
+    if (csv) {
+      const Status s = csv->write(r);
+      if (!s) throw std::runtime_error(s.message());
+    }
+    if (bvh) {
+      if (h.tracked) lastPose = h.pose;
+      if (!lastPose.bodies.empty()) bvh->add(lastPose);
+    }
+    if (info.hasGroundTruth) {
+      accuracy.groundTruth.push_back(reader->groundTruth(f));
+      accuracy.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21) : std::nullopt);
+    }
+    ++done;
+    char extra[64];
+    std::snprintf(extra, sizeof extra, "%s err %.0f mm", h.tracked ? "tracked" : "lost", 1000.0 * static_cast<double>(h.error));
+    progress.update(done, extra);
+  }
+  progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
+  if (writer) (void)writer->close();
+  if (csv) (void)csv->close();
+  if (bvh) {
+    const Status s = bvh->save(o.bvh);
+    if (!s) throw std::runtime_error(s.message());
+  }
+
+  std::printf("frames %d  tracked %d (%.1f%%)\n", done, trackedFrames, done ? 100.0 * trackedFrames / done : 0.0);
+  std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n", percentile(times, 0.5),
+              percentile(times, 0.99), percentile(times, 0.5) > 0 ? 1000.0 / percentile(times, 0.5) : 0.0);
+  if (info.hasGroundTruth && done > 0) {
+    auto m = eval::computeKeypointMetrics(accuracy);
+    if (m) {
+      std::printf("21-keypoint error vs ground truth  mean %.2f mm  median %.2f mm  p95 %.2f mm  "
+                  "max-joint<=30mm %.1f%% of frames\n",
+                  m->meanMm, m->medianMm, m->p95Mm, 100.0 * m->successFraction[2]);
+    }
+  }
+  for (const auto* path : {&o.out, &o.csv, &o.bvh}) {
+    if (!path->empty()) std::printf("wrote %s\n", path->c_str());
+  }
+  return interrupted() ? 130 : kExitOk;
+}
+
+const CommandRegistration kRegistration{Command{
+    "track", "track hands in a depth recording and write their poses",
+    [](CLI::App& sub) -> std::function<int()> {
+      auto o = std::make_shared<TrackOptions>();
+      sub.add_option("input", o->input, "sequence folder (canonical layout), .rs/.json recording, PNG folder or .oni")
+          ->required();
+      sub.add_option("-o,--out", o->out, "poses as JSON lines (.jsonl) or CSV (.csv)");
+      sub.add_option("--csv", o->csv, "also write the 21 keypoints as CSV");
+      sub.add_option("--bvh", o->bvh, "also write a BVH skeleton animation");
+      sub.add_option("--model", o->modelFile, "hand model file (default: the built-in hand)");
+      sub.add_option("--hand-length", o->handLength, "built-in hand: wrist crease to middle fingertip, m")
+          ->check(CLI::Range(0.10f, 0.30f));
+      sub.add_option("--hand-width", o->handWidth, "built-in hand: palm width at the knuckles, m")
+          ->check(CLI::Range(0.05f, 0.15f));
+      sub.add_option("--init", o->init, "gt (ground truth of the first frame), auto, or a pose JSONL file");
+      sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));
+      sub.add_option("--threads", o->threads, "worker threads (results are identical for any count)")
+          ->check(CLI::Range(1, 64));
+      sub.add_option("--start", o->start, "first frame")->check(CLI::NonNegativeNumber);
+      sub.add_option("--frames", o->frames, "number of frames (default: all)")->check(CLI::Range(1, 100000000));
+      sub.add_flag("--per-frame", o->perFrame, "acquire every frame afresh (frames far apart in time)");
+      sub.add_flag("--candidates", o->candidates, "write every simulation's error into the JSON lines");
+      sub.add_option("--disable", o->disable,
+                     "simulations to switch off: normal, gross_motion, grasp_bias, finger_flip, feature_detection");
+      sub.footer(
+          "Examples:\n"
+          "  dynahand track clip/ --out poses.jsonl\n"
+          "  dynahand track clip/ --init gt --out poses.jsonl --bvh hand.bvh\n"
+          "  dynahand track ../shared/data/sr305-hands/20210326-230536 --per-frame --out fits.jsonl");
+      return [o] { return runTrack(*o); };
+    }}};
+
+}  // namespace
+}  // namespace dynahand::cli

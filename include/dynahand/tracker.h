@@ -1,0 +1,113 @@
+// The tracker (paper sections 3-4): per depth frame, the cloud pipeline turns the
+// frame into sample points and boundary planes; several simulations (strategies)
+// start from the previous best state and fit the articulated hand to the points
+// with the physics solver; the paper's 3D error metric picks the winner, whose state
+// seeds the next frame. Lost hands are re-acquired without user action.
+//
+// Units: metres, seconds, radians; camera frame x right, y down, z forward.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dynahand/cloud.h"
+#include "dynahand/depth_frame.h"
+#include "dynahand/model.h"
+#include "dynahand/model_pose.h"
+
+namespace dynahand::track {
+
+using Keypoints21 = std::array<Vec3, 21>;
+
+// The simulations run every frame (paper: "Multiple Simulations and Error").
+enum class StrategyKind : int { Normal = 0, GrossMotion, GraspBias, FingerFlip, FeatureDetection };
+inline constexpr int kStrategyCount = 5;
+const char* strategyName(StrategyKind kind);  // "normal", "gross_motion", ...
+
+struct TrackerSettings {
+  CloudConfig cloud;  // filtering, segmentation, voxel size, planes
+  int hands = 1;      // 1, or 2 (k-means split, paper "Tracking of Multiple Hands")
+  // Strategies to run, by StrategyKind (ablations switch some off).
+  std::array<bool, kStrategyCount> strategies = {true, true, true, true, true};
+  int substeps = 3;              // physics steps per frame per simulation
+  float stepDt = 1.0f / 60.0f;   // s per physics step
+  int iterations = 16;           // Gauss-Seidel sweeps per step
+  int relaxIterations = 4;       // bias-removal sweeps per step
+  float pullForce = 600.0f;      // total surface-row force (N), split over the points
+  float boundaryForce = 200.0f;  // per boundary row (N)
+  // Lost when the winner's error per body stays above this (m) for lostAfterFrames
+  // frames, or when the hand leaves the view.
+  float lostErrorPerBodyM = 0.02f;
+  int lostAfterFrames = 3;
+  // Treat every frame as a fresh acquisition (no temporal prior), e.g. for frames far
+  // apart in time.
+  bool perFrame = false;
+  int acquisitionSubsteps = 24;  // physics steps when fitting from a canonical pose
+  float flipPeriodS = 0.5f;      // finger-flip choice cycles this often (sequence time)
+  bool keepCandidates = true;    // report every simulation's pose (for pictures)
+};
+
+// One simulation's outcome this frame.
+struct Candidate {
+  StrategyKind kind = StrategyKind::Normal;
+  bool ran = false;    // e.g. the detector did not fire
+  float error = 0.0f;  // m, the paper's errTotal
+  model::ModelPose pose;
+};
+
+struct HandResult {
+  model::Side side = model::Side::Right;
+  bool tracked = false;
+  model::ModelPose pose;      // 17 body poses (valid when tracked)
+  Keypoints21 keypoints21{};  // MediaPipe order, m
+  std::array<model::XrJoint, 26> openxr26{};
+  float error = 0.0f;            // errTotal of the winner, m
+  float fitError = 0.0f;         // sum errFit, m
+  float occlusionError = 0.0f;   // sum errOcc, m
+  std::vector<float> bodyError;  // (17) errFit_i + errOcc_i, m
+  StrategyKind simulation = StrategyKind::Normal;
+  bool acquired = false;  // this frame (re)acquired the hand from scratch
+  int pointCount = 0;     // sample points used
+  std::vector<Candidate> candidates;
+};
+
+struct TrackResult {
+  int frame = 0;
+  double timeMs = 0.0;  // wall time spent in track(), ms
+  std::vector<HandResult> hands;
+};
+
+class Tracker {
+ public:
+  // rightHand: the model for the right hand (the left is its mirror image).
+  static Result<std::unique_ptr<Tracker>> create(const model::ArticulatedModel& rightHand,
+                                                 const Intrinsics& intrinsics,
+                                                 const TrackerSettings& settings = {});
+  ~Tracker();
+
+  // Starts tracking from a known pose (e.g. ground truth) of the hand on `side`.
+  void initialize(const model::ModelPose& pose, model::Side side = model::Side::Right);
+  // Starts from 21 labelled keypoints of the first frame (fit under the joint limits).
+  Status initializeFromKeypoints(const Keypoints21& keypoints,
+                                 model::Side side = model::Side::Right);
+  // Forgets all state: the next frame acquires from scratch.
+  void reset();
+
+  // Tracks one frame. The reference stays valid until the next call.
+  const TrackResult& track(const DepthFrame& frame);
+
+  // The cloud of the last frame (points, mask, planes), e.g. for pictures.
+  const CloudFrame& lastCloud() const;
+  const model::ArticulatedModel& model(model::Side side) const;
+  const TrackerSettings& settings() const;
+
+ private:
+  struct Impl;
+  explicit Tracker(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dynahand::track

@@ -1,0 +1,176 @@
+#include "dynahand/track_io.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace dynahand::io {
+
+namespace {
+
+void appendVec(std::string& s, const Vec3& v) {
+  fmt::format_to(std::back_inserter(s), "[{:.6g},{:.6g},{:.6g}]", v.x(), v.y(), v.z());
+}
+void appendQuat(std::string& s, const Quat& q) {
+  // w first; the sign is chosen so w >= 0 (the same rotation, stable output).
+  const float sign = q.w() < 0 ? -1.0f : 1.0f;
+  fmt::format_to(std::back_inserter(s), "[{:.6g},{:.6g},{:.6g},{:.6g}]", sign * q.w(), sign * q.x(),
+                 sign * q.y(), sign * q.z());
+}
+// JSON has no NaN/inf: non-finite numbers are written as null.
+void appendNumber(std::string& s, float v) {
+  if (std::isfinite(v)) {
+    fmt::format_to(std::back_inserter(s), "{:.6g}", v);
+  } else {
+    s += "null";
+  }
+}
+
+const char* sideName(model::Side side) { return side == model::Side::Right ? "right" : "left"; }
+
+}  // namespace
+
+std::string trackResultToJson(const track::TrackResult& r, const model::ArticulatedModel& model,
+                              const JsonOptions& o) {
+  std::string s;
+  s.reserve(4096);
+  fmt::format_to(std::back_inserter(s), "{{\"version\":{},\"frame\":{},\"time_ms\":{:.3f},\"hands\":[",
+                 kTrackFormatVersion, r.frame, r.timeMs);
+  for (std::size_t h = 0; h < r.hands.size(); ++h) {
+    const track::HandResult& hand = r.hands[h];
+    if (h > 0) s += ',';
+    fmt::format_to(std::back_inserter(s), "{{\"side\":\"{}\",\"tracked\":{}", sideName(hand.side),
+                   hand.tracked ? "true" : "false");
+    if (hand.tracked) {
+      s += ",\"keypoints21\":[";
+      for (int k = 0; k < 21; ++k) {
+        if (k > 0) s += ',';
+        appendVec(s, hand.keypoints21[static_cast<std::size_t>(k)]);
+      }
+      s += ']';
+      if (o.openxr && model.hasOpenXrJoints()) {
+        s += ",\"openxr26\":[";
+        for (int j = 0; j < 26; ++j) {
+          const auto& joint = hand.openxr26[static_cast<std::size_t>(j)];
+          if (j > 0) s += ',';
+          s += "{\"p\":";
+          appendVec(s, joint.pose.p);
+          s += ",\"q\":";
+          appendQuat(s, joint.pose.q);
+          fmt::format_to(std::back_inserter(s), ",\"r\":{:.6g}}}", joint.radius);
+        }
+        s += ']';
+      }
+      if (o.bodies) {
+        s += ",\"bodies\":[";
+        for (std::size_t b = 0; b < hand.pose.bodies.size(); ++b) {
+          if (b > 0) s += ',';
+          fmt::format_to(std::back_inserter(s), "{{\"name\":\"{}\",\"p\":", model.bodies()[b].name);
+          appendVec(s, hand.pose.bodies[b].p);
+          s += ",\"q\":";
+          appendQuat(s, hand.pose.bodies[b].q);
+          s += '}';
+        }
+        s += ']';
+      }
+    } else {
+      s += ",\"keypoints21\":null";
+    }
+    s += ",\"error\":";
+    appendNumber(s, hand.error);
+    s += ",\"error_fit\":";
+    appendNumber(s, hand.fitError);
+    s += ",\"error_occlusion\":";
+    appendNumber(s, hand.occlusionError);
+    fmt::format_to(std::back_inserter(s), ",\"simulation\":\"{}\",\"acquired\":{},\"points\":{}",
+                   track::strategyName(hand.simulation), hand.acquired ? "true" : "false", hand.pointCount);
+    if (o.candidates) {
+      s += ",\"candidates\":[";
+      bool first = true;
+      for (const auto& c : hand.candidates) {
+        if (!c.ran) continue;
+        if (!first) s += ',';
+        first = false;
+        fmt::format_to(std::back_inserter(s), "{{\"simulation\":\"{}\",\"error\":", track::strategyName(c.kind));
+        appendNumber(s, c.error);
+        if (o.candidatePoses && !c.pose.bodies.empty()) {
+          s += ",\"bodies\":[";
+          for (std::size_t b = 0; b < c.pose.bodies.size(); ++b) {
+            if (b > 0) s += ',';
+            s += "{\"p\":";
+            appendVec(s, c.pose.bodies[b].p);
+            s += ",\"q\":";
+            appendQuat(s, c.pose.bodies[b].q);
+            s += '}';
+          }
+          s += ']';
+        }
+        s += '}';
+      }
+      s += ']';
+    }
+    s += '}';
+  }
+  s += "]}";
+  return s;
+}
+
+Result<std::unique_ptr<TrackWriter>> TrackWriter::create(const std::filesystem::path& path,
+                                                         const model::ArticulatedModel& model,
+                                                         const JsonOptions& options) {
+  auto w = std::unique_ptr<TrackWriter>(new TrackWriter());
+  w->path_ = path;
+  w->model_ = &model;
+  w->options_ = options;
+  const std::string ext = path.extension().string();
+  if (ext == ".csv") {
+    w->format_ = Format::Csv;
+  } else if (ext == ".jsonl" || ext == ".json" || ext == ".ndjson") {
+    w->format_ = Format::JsonLines;
+  } else {
+    return Error{path.string() + ": unknown output format '" + ext + "' (use .jsonl or .csv)"};
+  }
+  if (path.has_parent_path()) {
+    std::error_code ec;
+    std::filesystem::create_directories(path.parent_path(), ec);
+  }
+  w->out_.open(path, std::ios::out | std::ios::trunc);
+  if (!w->out_) return Error{path.string() + ": cannot write"};
+  if (w->format_ == Format::Csv) {
+    w->out_ << "frame,time_ms,side,tracked,error_m,simulation";
+    const auto& names = model::keypoint21Names();
+    for (const char* name : names) w->out_ << ',' << name << "_x," << name << "_y," << name << "_z";
+    w->out_ << '\n';
+  }
+  return w;
+}
+
+Status TrackWriter::write(const track::TrackResult& r) {
+  if (format_ == Format::JsonLines) {
+    out_ << trackResultToJson(r, *model_, options_) << '\n';
+  } else {
+    for (const auto& hand : r.hands) {
+      std::string row = fmt::format("{},{:.3f},{},{},{:.6g},{}", r.frame, r.timeMs, sideName(hand.side),
+                                    hand.tracked ? 1 : 0, hand.error, track::strategyName(hand.simulation));
+      for (const Vec3& k : hand.keypoints21) {
+        if (hand.tracked) {
+          fmt::format_to(std::back_inserter(row), ",{:.6g},{:.6g},{:.6g}", k.x(), k.y(), k.z());
+        } else {
+          row += ",,,";
+        }
+      }
+      out_ << row << '\n';
+    }
+  }
+  out_.flush();  // an interrupted run keeps every frame written so far
+  if (!out_) return Error{path_.string() + ": write failed"};
+  return Ok{};
+}
+
+Status TrackWriter::close() {
+  out_.close();
+  if (out_.fail()) return Error{path_.string() + ": could not be closed"};
+  return Ok{};
+}
+
+}  // namespace dynahand::io

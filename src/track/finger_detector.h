@@ -1,0 +1,54 @@
+// The paper's naive five-finger detector ("Feature Detection"): scanlines across the
+// hand's segmentation mask, from the fingertips toward the wrist, follow contiguous
+// segments; it fires when five segments (fingers) run side by side and then come
+// together (the palm). The top of each segment is a fingertip. Scanlines run across
+// the hand axis (away from where the arm leaves the region), so a hand rotated in the
+// image plane is found too.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "dynahand/cloud.h"
+
+namespace dynahand::track {
+
+struct FingerDetectorSettings {
+  float minFingerWidthM = 0.005f;   // narrower runs are noise (m)
+  float maxFingerWidthM = 0.035f;   // wider runs are not a single finger (m)
+  float minFingerLengthM = 0.015f;  // a segment must run this long before it counts (m)
+  float maxScanLengthM = 0.16f;     // scan from the top this far toward the wrist (m)
+};
+
+struct FingerDetection {
+  bool fired = false;
+  // Fingertips ordered thumb, index, middle, ring, pinky (camera frame, m) when fired.
+  std::array<Vec3, 5> tips{};
+  std::array<Vec2, 5> tipPixels{};
+  Vec2 axisImage = Vec2(0, -1);  // unit, wrist -> fingertips in the image
+  Vec2 thumbSideImage = Vec2(1, 0);  // unit, across the hand toward the thumb
+};
+
+class FingerDetector {
+ public:
+  explicit FingerDetector(const FingerDetectorSettings& settings = {}) : settings_(settings) {}
+  // Looks for an open hand in the cloud's segmentation mask.
+  const FingerDetection& detect(const CloudFrame& cloud);
+
+ private:
+  struct Run {
+    int begin, end;  // sample columns, half-open
+    int segment;
+  };
+  struct Segment {
+    int topRow;
+    float topColumn;
+    int length;  // rows
+  };
+  FingerDetectorSettings settings_;
+  FingerDetection result_;
+  std::vector<Run> runs_, previousRuns_;
+  std::vector<Segment> segments_;
+};
+
+}  // namespace dynahand::track

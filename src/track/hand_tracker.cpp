@@ -1,0 +1,225 @@
+#include "track/hand_tracker.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace dynahand::track {
+
+namespace {
+
+constexpr int kMinPoints = 20;  // fewer sample points: no hand in view
+
+physics::WorldSettings worldSettings(const TrackerSettings& s) {
+  physics::WorldSettings w;
+  w.iterations = s.iterations;
+  w.relaxIterations = s.relaxIterations;
+  return w;
+}
+
+SimulationSettings simulationSettings(const TrackerSettings& s) {
+  SimulationSettings sim;
+  sim.substeps = s.substeps;
+  sim.stepDt = s.stepDt;
+  sim.pullForce = s.pullForce;
+  sim.boundaryForce = s.boundaryForce;
+  return sim;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<HandTracker>> HandTracker::create(const model::ArticulatedModel& model, model::Side side,
+                                                         const TrackerSettings& settings) {
+  auto rig = HandRig::create(model, worldSettings(settings), RigSettings{}, settings.stepDt);
+  if (!rig) return rig.error();
+  return std::unique_ptr<HandTracker>(new HandTracker(model, side, settings, std::move(*rig)));
+}
+
+HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side, const TrackerSettings& settings,
+                         HandRig rig)
+    : model_(&model), side_(side), settings_(settings), rig_(std::move(rig)),
+      simulator_(simulationSettings(settings)) {
+  for (int k = 0; k < kStrategyCount; ++k) {
+    if (settings_.strategies[static_cast<std::size_t>(k)]) strategies_.push_back(makeStrategy(static_cast<StrategyKind>(k)));
+  }
+  openAngles_ = model::zeroAngles(model);
+  model::clampToLimits(model, openAngles_);
+  // Room for every row a frame can make: points + labels + boundary rows.
+  rig_.world().reserveRows(settings_.cloud.maxVoxels + 64 + 17 * settings_.cloud.planes.planeCount);
+}
+
+void HandTracker::initialize(const model::ModelPose& pose) {
+  rig_.setPose(pose);
+  tracked_ = true;
+  badFrames_ = 0;
+}
+
+void HandTracker::reset() {
+  tracked_ = false;
+  badFrames_ = 0;
+}
+
+float HandTracker::evaluate(const HandFrame& frame) {
+  simulator_.pose(rig_, posed_);
+  const CloudFrame* cloud = frame.cloud;
+  computeError(posed_, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); }, error_);
+  return error_.total;
+}
+
+void HandTracker::track(const HandFrame& frame, HandResult& out) {
+  out.side = side_;
+  out.acquired = false;
+  out.candidates.clear();
+  out.pointCount = static_cast<int>(frame.points.size());
+  if (frame.points.size() < static_cast<std::size_t>(kMinPoints)) {
+    // The hand left the view: lost until it comes back and is re-acquired.
+    tracked_ = false;
+    badFrames_ = 0;
+    out.tracked = false;
+    out.error = 0.0f;
+    return;
+  }
+  if (!tracked_ || settings_.perFrame) {
+    acquire(frame, out);
+  } else {
+    runStrategies(frame, out);
+  }
+  fillResult(frame, out);
+}
+
+void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
+  auto& world = rig_.world();
+  world.saveState(start_);
+  rig_.readPose(pose_);
+  model::jointAnglesInto(*model_, pose_, startAngles_);
+  float bestError = std::numeric_limits<float>::infinity();
+  StrategyKind bestKind = StrategyKind::Normal;
+  for (auto& strategy : strategies_) {
+    world.restoreState(start_);
+    StrategyContext context{rig_, simulator_, FrameInput{frame.points, frame.planes, {}, frame.cloud},
+                            settings_.substeps, frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};
+    Candidate candidate;
+    candidate.kind = strategy->kind();
+    candidate.ran = strategy->run(context);
+    if (candidate.ran) {
+      candidate.error = evaluate(frame);
+      if (candidate.error < bestError) {
+        bestError = candidate.error;
+        bestKind = candidate.kind;
+        world.saveState(best_);
+      }
+      if (settings_.keepCandidates) rig_.readPose(candidate.pose);
+    }
+    out.candidates.push_back(std::move(candidate));
+  }
+  if (std::isfinite(bestError)) world.restoreState(best_);
+  out.simulation = bestKind;
+  const float threshold = settings_.lostErrorPerBodyM * static_cast<float>(model_->bodyCount());
+  badFrames_ = bestError > threshold ? badFrames_ + 1 : 0;
+  if (badFrames_ >= settings_.lostAfterFrames) tracked_ = false;
+}
+
+model::ModelPose HandTracker::canonicalPose(const HandFrame& frame, const Vec2& axisImage,
+                                            const Vec2& thumbSideImage) const {
+  const model::ModelPose rest = model::forwardKinematics(*model_, openAngles_);
+  const auto k = model::keypoints21(*model_, rest);
+  const Vec3 fingerModel = (k[9] - k[0]).normalized();
+  Vec3 thumbModel = (k[5] - k[17]);
+  if (side_ == model::Side::Left) thumbModel = -thumbModel;  // mirrored: index->pinky points away from the thumb
+  thumbModel = (thumbModel - thumbModel.dot(fingerModel) * fingerModel).normalized();
+
+  // Mean of the points and its pixel; image directions lifted to the plane z = const.
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : frame.points) centroid += p;
+  centroid /= static_cast<float>(frame.points.size());
+  Vec3 fingerCam(axisImage.x(), axisImage.y(), 0.0f);
+  Vec3 thumbCam(thumbSideImage.x(), thumbSideImage.y(), 0.0f);
+  fingerCam.normalize();
+  thumbCam = (thumbCam - thumbCam.dot(fingerCam) * fingerCam).normalized();
+
+  Mat3 from, to;
+  from << fingerModel, thumbModel, fingerModel.cross(thumbModel);
+  to << fingerCam, thumbCam, fingerCam.cross(thumbCam);
+  const Quat rotation(to * from.transpose());
+  Vec3 handCentre = Vec3::Zero();
+  for (const Vec3& p : k) handCentre += p;
+  handCentre /= 21.0f;
+  // The surface seen is the front of the hand; its middle lies about a centimetre behind.
+  const Vec3 target = centroid + Vec3(0, 0, 0.01f);
+  const Pose transform{target - rotation * handCentre, rotation.normalized()};
+  model::ModelPose placed = rest;
+  for (auto& body : placed.bodies) body = transform * body;
+  return placed;
+}
+
+void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
+  auto& world = rig_.world();
+  Vec2 axis(0.0f, -1.0f);
+  if (frame.cloud != nullptr && frame.cloud->segment.armDirectionImage.norm() > 0.5f) {
+    axis = -frame.cloud->segment.armDirectionImage.normalized();
+  }
+  const Vec2 across(-axis.y(), axis.x());  // thumb side of a right palm facing the camera
+  struct Start {
+    Vec2 axis, thumb;
+    bool labelled;
+  };
+  std::vector<Start> starts;
+  const float mirror = side_ == model::Side::Right ? 1.0f : -1.0f;
+  const bool detected = frame.detection != nullptr && frame.detection->fired;
+  if (detected) {
+    starts.push_back({frame.detection->axisImage, frame.detection->thumbSideImage, true});
+  }
+  starts.push_back({axis, across * mirror, false});   // palm toward the camera
+  starts.push_back({axis, -across * mirror, false});  // back of the hand toward the camera
+
+  float bestError = std::numeric_limits<float>::infinity();
+  std::vector<LabelledPoint> labels;
+  for (const Start& s : starts) {
+    rig_.setPose(canonicalPose(frame, s.axis, s.thumb));
+    FrameInput input{frame.points, frame.planes, {}, frame.cloud};
+    int steps = settings_.acquisitionSubsteps;
+    if (s.labelled) {
+      labels.clear();
+      for (int f = 0; f < kFingerCount; ++f) {
+        const int tip = rig_.anatomy().fingers[static_cast<std::size_t>(f)][2];
+        labels.push_back({frame.detection->tips[static_cast<std::size_t>(f)], BodyMask{1} << tip, 20.0f});
+      }
+      input.labelled = labels;
+      simulator_.run(rig_, input, steps / 2);
+      input.labelled = {};
+      steps -= steps / 2;
+    }
+    simulator_.run(rig_, input, steps);
+    Candidate candidate;
+    candidate.kind = s.labelled ? StrategyKind::FeatureDetection : StrategyKind::Normal;
+    candidate.ran = true;
+    candidate.error = evaluate(frame);
+    if (candidate.error < bestError) {
+      bestError = candidate.error;
+      world.saveState(best_);
+      out.simulation = candidate.kind;
+    }
+    if (settings_.keepCandidates) rig_.readPose(candidate.pose);
+    out.candidates.push_back(std::move(candidate));
+  }
+  world.restoreState(best_);
+  for (int b = 0; b < world.bodyCount(); ++b) world.setVelocity(b, Vec3::Zero(), Vec3::Zero());
+  const float threshold = settings_.lostErrorPerBodyM * static_cast<float>(model_->bodyCount());
+  tracked_ = bestError <= threshold;
+  badFrames_ = 0;
+  out.acquired = tracked_;
+}
+
+void HandTracker::fillResult(const HandFrame& frame, HandResult& out) {
+  rig_.readPose(out.pose);
+  const float err = evaluate(frame);
+  out.tracked = tracked_;
+  out.error = err;
+  out.fitError = error_.fitTotal;
+  out.occlusionError = error_.occlusionTotal;
+  out.bodyError.resize(error_.fit.size());
+  for (std::size_t i = 0; i < error_.fit.size(); ++i) out.bodyError[i] = error_.fit[i] + error_.occlusion[i];
+  out.keypoints21 = model::keypoints21(*model_, out.pose);
+  if (model_->hasOpenXrJoints()) out.openxr26 = model::openxr26(*model_, out.pose);
+}
+
+}  // namespace dynahand::track

@@ -1,0 +1,63 @@
+// Tracking of one hand: its rig (physics world), the strategies, the error metric,
+// acquisition from scratch and the tracked/lost state.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "dynahand/tracker.h"
+#include "track/error_metric.h"
+#include "track/finger_detector.h"
+#include "track/hand_rig.h"
+#include "track/simulation.h"
+#include "track/strategies/strategy.h"
+
+namespace dynahand::track {
+
+struct HandFrame {
+  std::span<const Vec3> points;  // this hand's sample points, m
+  std::span<const BoundaryPlane> planes;
+  const CloudFrame* cloud = nullptr;
+  const FingerDetection* detection = nullptr;  // nullptr or not fired: none
+  double time = 0.0;  // sequence time, s
+};
+
+class HandTracker {
+ public:
+  static Result<std::unique_ptr<HandTracker>> create(const model::ArticulatedModel& model, model::Side side,
+                                                     const TrackerSettings& settings);
+  void initialize(const model::ModelPose& pose);
+  void reset();
+  bool tracked() const { return tracked_; }
+  const model::ArticulatedModel& model() const { return *model_; }
+  void track(const HandFrame& frame, HandResult& out);
+
+ private:
+  HandTracker(const model::ArticulatedModel& model, model::Side side, const TrackerSettings& settings,
+              HandRig rig);
+  float evaluate(const HandFrame& frame);
+  void runStrategies(const HandFrame& frame, HandResult& out);
+  void acquire(const HandFrame& frame, HandResult& out);
+  // The open hand placed at the cloud: fingers along axisImage (wrist -> tips), thumb
+  // toward thumbSideImage, palm centre at the cloud's centroid.
+  model::ModelPose canonicalPose(const HandFrame& frame, const Vec2& axisImage, const Vec2& thumbSideImage) const;
+  void fillResult(const HandFrame& frame, HandResult& out);
+
+  const model::ArticulatedModel* model_;
+  model::Side side_;
+  TrackerSettings settings_;
+  HandRig rig_;
+  Simulator simulator_;
+  std::vector<std::unique_ptr<Strategy>> strategies_;
+  physics::WorldState start_, best_;
+  model::ModelPose pose_;
+  model::JointAngles startAngles_;
+  model::JointAngles openAngles_;  // the acquisition pose's angles
+  PosedBodies posed_;
+  ErrorBreakdown error_;
+  bool tracked_ = false;
+  int badFrames_ = 0;
+};
+
+}  // namespace dynahand::track

@@ -1,0 +1,65 @@
+// One tracking simulation step sequence, shared by every strategy: each substep maps
+// the sample points onto the model (nearest face of the nearest body, re-mapped every
+// substep), turns them into impulse-capped surface rows (line-of-sight rows for points
+// that land on a back face), adds the free-space boundary planes, and steps the
+// physics world (joints, limits, collisions and prior motion are the world's own).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "dynahand/cloud.h"
+#include "track/hand_rig.h"
+#include "track/posed_bodies.h"
+
+namespace dynahand::track {
+
+struct SimulationSettings {
+  int substeps = 3;          // physics steps per depth frame
+  float stepDt = 1.0f / 60;  // s per physics step
+  // Total pull of all surface rows together (N); each row's impulse cap is
+  // pullForce * stepDt / pointCount, so the total does not depend on the point count or
+  // the voxel size (the paper's "impulse cap").
+  float pullForce = 600.0f;
+  float boundaryForce = 200.0f;  // cap per boundary row (N), times stepDt
+  float boundaryMargin = 0.02f;  // planes farther than this from a body add no row (m)
+  // Points farther than this from every body make no row: they belong to something else.
+  float maxAttachDistance = 0.06f;
+};
+
+// A sample point bound to a set of bodies ("this point is on some fingertip").
+struct LabelledPoint {
+  Vec3 point = Vec3::Zero();  // m, camera frame
+  BodyMask bodies = kAllBodies;
+  float capScale = 1.0f;      // times the ordinary surface-row cap
+};
+
+// Everything one simulation needs for the current frame.
+struct FrameInput {
+  std::span<const Vec3> points;        // voxel cloud of this hand, m
+  std::span<const BoundaryPlane> planes;
+  std::span<const LabelledPoint> labelled;
+  const CloudFrame* cloud = nullptr;   // for free-space queries
+};
+
+class Simulator {
+ public:
+  explicit Simulator(const SimulationSettings& settings) : settings_(settings) {}
+  const SimulationSettings& settings() const { return settings_; }
+
+  // Runs `substeps` physics steps of the rig on the frame's data.
+  void run(HandRig& rig, const FrameInput& input, int substeps);
+  // Refreshes `bodies` from the rig's current poses.
+  void pose(const HandRig& rig, PosedBodies& bodies);
+
+ private:
+  void addRows(HandRig& rig, const FrameInput& input);
+
+  SimulationSettings settings_;
+  PosedBodies bodies_;
+  std::vector<const physics::ConvexShape*> shapes_;
+  std::vector<Pose> poses_;
+  std::vector<int> hints_;  // (points) body each point attached to last pass
+};
+
+}  // namespace dynahand::track

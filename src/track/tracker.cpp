@@ -1,0 +1,146 @@
+#include "dynahand/tracker.h"
+
+#include <chrono>
+
+#include "dynahand/hand_split.h"
+#include "dynahand/model_fit.h"
+
+#include "track/finger_detector.h"
+#include "track/hand_tracker.h"
+
+namespace dynahand::track {
+
+const char* strategyName(StrategyKind kind) {
+  switch (kind) {
+    case StrategyKind::Normal: return "normal";
+    case StrategyKind::GrossMotion: return "gross_motion";
+    case StrategyKind::GraspBias: return "grasp_bias";
+    case StrategyKind::FingerFlip: return "finger_flip";
+    case StrategyKind::FeatureDetection: return "feature_detection";
+  }
+  return "unknown";
+}
+
+struct Tracker::Impl {
+  TrackerSettings settings;
+  Intrinsics intrinsics;
+  model::ArticulatedModel right;
+  model::ArticulatedModel left;
+  CloudPipeline pipeline;
+  CloudFrame cloud;
+  HandSplitter splitter;
+  HandSplit split;
+  FingerDetector detector;
+  std::unique_ptr<HandTracker> hands[2];  // [0] right, [1] left
+  std::vector<Vec3> handPoints[2];
+  TrackResult result;
+  int frameIndex = 0;
+
+  Impl(const model::ArticulatedModel& rightHand, const Intrinsics& k, const TrackerSettings& s)
+      : settings(s), intrinsics(k), right(rightHand), left(model::mirrorModel(rightHand)),
+        pipeline(k, s.cloud) {}
+};
+
+Tracker::Tracker(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Tracker::~Tracker() = default;
+
+Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& rightHand,
+                                                 const Intrinsics& intrinsics, const TrackerSettings& settings) {
+  if (intrinsics.width <= 0 || intrinsics.height <= 0 || !(intrinsics.fx > 0) || !(intrinsics.fy > 0)) {
+    return Error{"invalid camera intrinsics"};
+  }
+  if (settings.hands != 1 && settings.hands != 2) return Error{"hands must be 1 or 2"};
+  if (settings.substeps < 1 || settings.iterations < 1) return Error{"substeps and iterations must be >= 1"};
+  auto impl = std::make_unique<Impl>(rightHand, intrinsics, settings);
+  auto right = HandTracker::create(impl->right, model::Side::Right, settings);
+  if (!right) return right.error();
+  impl->hands[0] = std::move(*right);
+  if (settings.hands == 2) {
+    auto left = HandTracker::create(impl->left, model::Side::Left, settings);
+    if (!left) return left.error();
+    impl->hands[1] = std::move(*left);
+  }
+  return std::unique_ptr<Tracker>(new Tracker(std::move(impl)));
+}
+
+void Tracker::initialize(const model::ModelPose& pose, model::Side side) {
+  auto& hand = impl_->hands[side == model::Side::Right ? 0 : 1];
+  if (hand) hand->initialize(pose);
+}
+
+Status Tracker::initializeFromKeypoints(const Keypoints21& keypoints, model::Side side) {
+  const auto& m = side == model::Side::Right ? impl_->right : impl_->left;
+  auto fit = model::fitToKeypoints(m, keypoints);
+  if (!fit) return fit.error();
+  initialize(model::forwardKinematics(m, fit->angles), side);
+  return Ok{};
+}
+
+void Tracker::reset() {
+  for (auto& hand : impl_->hands) {
+    if (hand) hand->reset();
+  }
+  impl_->splitter.reset();
+}
+
+const CloudFrame& Tracker::lastCloud() const { return impl_->cloud; }
+const model::ArticulatedModel& Tracker::model(model::Side side) const {
+  return side == model::Side::Right ? impl_->right : impl_->left;
+}
+const TrackerSettings& Tracker::settings() const { return impl_->settings; }
+
+const TrackResult& Tracker::track(const DepthFrame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  Impl& m = *impl_;
+  TrackResult& r = m.result;
+  r.frame = m.frameIndex++;
+  const double time = frame.timestamp > 0.0
+                          ? frame.timestamp
+                          : r.frame * static_cast<double>(m.settings.stepDt) * m.settings.substeps;
+  const Status processed = m.pipeline.process(frame, m.cloud);
+  const bool haveCloud = processed.ok() && m.cloud.segment.found;
+  const FingerDetection* detection = nullptr;
+  if (haveCloud && m.settings.strategies[static_cast<std::size_t>(StrategyKind::FeatureDetection)]) {
+    detection = &m.detector.detect(m.cloud);
+  }
+
+  const int handCount = m.settings.hands;
+  r.hands.resize(static_cast<std::size_t>(handCount));
+  for (auto& pts : m.handPoints) pts.clear();
+  if (haveCloud) {
+    if (handCount == 1) {
+      m.handPoints[0].assign(m.cloud.points.begin(), m.cloud.points.end());
+    } else {
+      m.splitter.split(m.cloud.points, m.split);
+      for (std::size_t i = 0; i < m.cloud.points.size(); ++i) {
+        const int h = m.split.label[i] == Hand::kRight ? 0 : 1;
+        m.handPoints[h].push_back(m.cloud.points[i]);
+      }
+    }
+  }
+  for (int h = 0; h < handCount; ++h) {
+    HandFrame in;
+    in.points = m.handPoints[h];
+    in.planes = m.cloud.planes;
+    in.cloud = &m.cloud;
+    in.time = time;
+    // A detection belongs to the only hand, or to the hand whose cluster holds its tips.
+    if (detection != nullptr && detection->fired) {
+      if (handCount == 1) {
+        in.detection = detection;
+      } else {
+        const Vec3 tips = (detection->tips[0] + detection->tips[4]) * 0.5f;
+        const auto& mine = m.split[h == 0 ? Hand::kRight : Hand::kLeft];
+        const auto& other = m.split[h == 0 ? Hand::kLeft : Hand::kRight];
+        if (mine.present && (!other.present || (tips - mine.centroid).norm() < (tips - other.centroid).norm())) {
+          in.detection = detection;
+        }
+      }
+    }
+    m.hands[h]->track(in, r.hands[static_cast<std::size_t>(h)]);
+  }
+  r.timeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace dynahand::track

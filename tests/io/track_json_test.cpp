@@ -1,0 +1,110 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "dynahand/keypoint_io.h"
+#include "dynahand/model_pose.h"
+#include "dynahand/track_io.h"
+#include "test_support.h"
+
+namespace dynahand::io {
+namespace {
+
+track::TrackResult sampleResult(const model::ArticulatedModel& hand, int frame, bool tracked) {
+  model::JointAngles a = model::zeroAngles(hand);
+  model::clampToLimits(hand, a);
+  a.root.p = Vec3(0.01f * frame, 0, 0.4f);
+  track::TrackResult r;
+  r.frame = frame;
+  r.timeMs = 1.5;
+  track::HandResult h;
+  h.tracked = tracked;
+  h.pose = model::forwardKinematics(hand, a);
+  h.keypoints21 = model::keypoints21(hand, h.pose);
+  h.openxr26 = model::openxr26(hand, h.pose);
+  h.error = 0.05f;
+  h.simulation = track::StrategyKind::GraspBias;
+  track::Candidate c;
+  c.kind = track::StrategyKind::Normal;
+  c.ran = true;
+  c.error = 0.07f;
+  h.candidates.push_back(c);
+  r.hands.push_back(h);
+  return r;
+}
+
+TEST(TrackJson, HasTheDocumentedFields) {
+  const auto hand = model::makeDefaultHand();
+  const auto r = sampleResult(hand, 3, true);
+  JsonOptions o;
+  o.candidates = true;
+  const auto j = nlohmann::json::parse(trackResultToJson(r, hand, o));
+  EXPECT_EQ(j["version"], kTrackFormatVersion);
+  EXPECT_EQ(j["frame"], 3);
+  ASSERT_EQ(j["hands"].size(), 1u);
+  const auto& h = j["hands"][0];
+  EXPECT_EQ(h["side"], "right");
+  EXPECT_EQ(h["tracked"], true);
+  ASSERT_EQ(h["keypoints21"].size(), 21u);
+  EXPECT_NEAR(h["keypoints21"][8][0].get<float>(), r.hands[0].keypoints21[8].x(), 1e-5f);
+  ASSERT_EQ(h["openxr26"].size(), 26u);
+  EXPECT_EQ(h["openxr26"][0]["q"].size(), 4u);
+  EXPECT_GE(h["openxr26"][0]["q"][0].get<float>(), 0.0f);  // w first, non-negative
+  ASSERT_EQ(h["bodies"].size(), 17u);
+  EXPECT_EQ(h["bodies"][1]["name"], hand.bodies()[1].name);
+  EXPECT_EQ(h["simulation"], "grasp_bias");
+  EXPECT_NEAR(h["error"].get<float>(), 0.05f, 1e-6f);
+  ASSERT_EQ(h["candidates"].size(), 1u);
+  EXPECT_EQ(h["candidates"][0]["simulation"], "normal");
+}
+
+TEST(TrackJson, LostHandHasNullKeypoints) {
+  const auto hand = model::makeDefaultHand();
+  const auto j = nlohmann::json::parse(trackResultToJson(sampleResult(hand, 0, false), hand));
+  EXPECT_EQ(j["hands"][0]["tracked"], false);
+  EXPECT_TRUE(j["hands"][0]["keypoints21"].is_null());
+  EXPECT_FALSE(j["hands"][0].contains("bodies"));
+}
+
+TEST(TrackWriter, JsonLinesReadBackByEvalAndCsvHasAColumnPerCoordinate) {
+  const auto hand = model::makeDefaultHand();
+  const auto dir = test::scratchDir("track_writer");
+  auto jsonl = TrackWriter::create(dir / "poses.jsonl", hand);
+  auto csv = TrackWriter::create(dir / "poses.csv", hand);
+  ASSERT_TRUE(jsonl.ok() && csv.ok());
+  for (int f = 0; f < 4; ++f) {
+    const auto r = sampleResult(hand, f, f != 2);
+    ASSERT_TRUE((*jsonl)->write(r).ok());
+    ASSERT_TRUE((*csv)->write(r).ok());
+  }
+  ASSERT_TRUE((*jsonl)->close().ok());
+  ASSERT_TRUE((*csv)->close().ok());
+  auto back = eval::readKeypointsJsonl(dir / "poses.jsonl");
+  ASSERT_TRUE(back.ok()) << back.message();
+  ASSERT_EQ(back->frames.size(), 4u);
+  EXPECT_TRUE(back->frames[0].has_value());
+  EXPECT_FALSE(back->frames[2].has_value());
+  EXPECT_NEAR((*back->frames[3])[0].x(), sampleResult(hand, 3, true).hands[0].keypoints21[0].x(), 1e-5f);
+
+  std::ifstream in(dir / "poses.csv");
+  std::string header, line;
+  std::getline(in, header);
+  EXPECT_EQ(std::count(header.begin(), header.end(), ','), 6 + 63 - 1);
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), 6 + 63 - 1) << line;
+  }
+  EXPECT_EQ(rows, 4);
+}
+
+TEST(TrackWriter, RejectsUnknownExtension) {
+  const auto hand = model::makeDefaultHand();
+  auto w = TrackWriter::create(test::scratchDir("track_writer_bad") / "poses.txt", hand);
+  ASSERT_FALSE(w.ok());
+  EXPECT_NE(w.message().find(".txt"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dynahand::io

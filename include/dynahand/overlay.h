@@ -1,0 +1,50 @@
+// Pictures of what was tracked: depth images shaded in colour with hand skeletons and
+// the model's convex bodies drawn over them, and contact sheets of such tiles.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "dynahand/core.h"
+#include "dynahand/depth_frame.h"
+#include "dynahand/model.h"
+#include "dynahand/model_pose.h"
+
+namespace dynahand::eval {
+
+struct Rgb {
+  std::uint8_t r = 0, g = 0, b = 0;
+};
+
+// An 8-bit RGB image, row-major, 3 bytes per pixel.
+struct RgbImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> pixels;  // (height x width x 3)
+
+  RgbImage() = default;
+  RgbImage(int w, int h) : width(w), height(h), pixels(static_cast<std::size_t>(w) * h * 3, 0) {}
+  Status savePng(const std::filesystem::path& path) const;
+};
+
+// Depth shaded from near (warm) to far (cool) between nearM and farM; no data black.
+RgbImage shadeDepth(const DepthFrame& depth, float nearM, float farM);
+// The 21-keypoint skeleton (MediaPipe bones) projected through the camera.
+void drawSkeleton(RgbImage& image, const Intrinsics& camera, const std::array<Vec3, 21>& keypoints,
+                  Rgb colour, int thickness = 1);
+// Every body's hull edges projected through the camera, blended with `opacity` in [0, 1].
+void drawModel(RgbImage& image, const Intrinsics& camera, const model::ArticulatedModel& model,
+               const model::ModelPose& pose, Rgb colour, float opacity = 1.0f);
+// Text in the top-left corner (or at row `line`).
+void drawLabel(RgbImage& image, const std::string& text, int line = 0, Rgb colour = {255, 255, 255});
+// The window of `image` around a set of points (with a margin in pixels), scaled to
+// tileWidth x tileHeight, keeping the aspect ratio.
+RgbImage cropAround(const RgbImage& image, const Intrinsics& camera, const std::vector<Vec3>& points,
+                    int marginPixels, int tileWidth, int tileHeight);
+// Tiles of equal size in rows of `columns`.
+RgbImage contactSheet(const std::vector<RgbImage>& tiles, int columns);
+
+}  // namespace dynahand::eval

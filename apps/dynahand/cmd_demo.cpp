@@ -30,12 +30,6 @@ struct ClipSummary {
   double p50Ms = 0, p99Ms = 0;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
-}
-
 int runDemo(const DemoOptions& o) {
   const std::vector<std::string> clips = o.clips.empty() ? synth::defaultClipSet() : o.clips;
   installInterruptHandler();
@@ -88,7 +82,7 @@ int runDemo(const DemoOptions& o) {
     }
     auto m = eval::computeKeypointMetrics(keypoints);
     if (!m) throw std::runtime_error(m.message());
-    summaries.push_back({clip, *m, percentile(times, 0.5), percentile(times, 0.99)});
+    summaries.push_back({clip, *m, eval::percentile(times, 0.5), eval::percentile(times, 0.99)});
     all.groundTruth.insert(all.groundTruth.end(), keypoints.groundTruth.begin(), keypoints.groundTruth.end());
     all.predicted.insert(all.predicted.end(), keypoints.predicted.begin(), keypoints.predicted.end());
     allTimes.insert(allTimes.end(), times.begin(), times.end());
@@ -97,7 +91,7 @@ int runDemo(const DemoOptions& o) {
   progress.finish();
   auto total = eval::computeKeypointMetrics(all);
   if (!total) throw std::runtime_error(total.message());
-  summaries.push_back({"all", *total, percentile(allTimes, 0.5), percentile(allTimes, 0.99)});
+  summaries.push_back({"all", *total, eval::percentile(allTimes, 0.5), eval::percentile(allTimes, 0.99)});
 
   std::ostringstream table;
   table << "| clip | frames | mean error (mm) | p95 (mm) | frames max joint <= 30 mm | lost | p50 ms | p99 ms |\n"

@@ -24,12 +24,6 @@ struct TrackOptions {
   std::vector<std::string> disable;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
-}
-
 int runTrack(const TrackOptions& o) {
   if (o.input.rfind("camera:", 0) == 0) {
     throw UsageError("live cameras: record with 'dynahand record' first, then track the recording");
@@ -141,8 +135,8 @@ int runTrack(const TrackOptions& o) {
   }
 
   std::printf("frames %d  tracked %d (%.1f%%)\n", done, trackedFrames, done ? 100.0 * trackedFrames / done : 0.0);
-  std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n", percentile(times, 0.5),
-              percentile(times, 0.99), percentile(times, 0.5) > 0 ? 1000.0 / percentile(times, 0.5) : 0.0);
+  std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n", eval::percentile(times, 0.5),
+              eval::percentile(times, 0.99), eval::percentile(times, 0.5) > 0 ? 1000.0 / eval::percentile(times, 0.5) : 0.0);
   if (info.hasGroundTruth && done > 0) {
     auto m = eval::computeKeypointMetrics(accuracy);
     if (m) {

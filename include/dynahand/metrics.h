@@ -54,6 +54,9 @@ struct KeypointMetrics {
   int unrecoveredEpisodes = 0;  // lost at the end of the sequence
 };
 
+// The q-quantile (q in [0, 1]) of values, interpolated linearly; 0 for no values.
+double percentile(std::vector<double> values, double q);
+
 // Computes every metric. groundTruth and predicted must have the same length.
 Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& sequence,
                                                const MetricsOptions& options = {});

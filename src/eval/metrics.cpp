@@ -16,7 +16,7 @@ namespace {
 constexpr double kMmPerM = 1000.0;
 
 // Linear-interpolated percentile of sorted values, q in [0, 1].
-double percentile(const std::vector<double>& sorted, double q) {
+double sortedPercentile(const std::vector<double>& sorted, double q) {
   if (sorted.empty()) return 0.0;
   const double pos = q * static_cast<double>(sorted.size() - 1);
   const auto lo = static_cast<std::size_t>(std::floor(pos));
@@ -33,6 +33,11 @@ bool allFinite(const Keypoints21& k) {
 }
 
 }  // namespace
+
+double percentile(std::vector<double> values, double q) {
+  std::sort(values.begin(), values.end());
+  return sortedPercentile(values, q);
+}
 
 Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& s,
                                                const MetricsOptions& options) {
@@ -99,8 +104,8 @@ Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& s,
     double total = 0;
     for (double e : all) total += e;
     m.meanMm = total / static_cast<double>(all.size());
-    m.medianMm = percentile(sorted, 0.5);
-    m.p95Mm = percentile(sorted, 0.95);
+    m.medianMm = sortedPercentile(sorted, 0.5);
+    m.p95Mm = sortedPercentile(sorted, 0.95);
     m.maxMm = sorted.back();
     for (int j = 0; j < 21; ++j) m.perJointMeanMm[j] = jointSum[j] / m.evaluatedFrames;
   }

@@ -1,5 +1,7 @@
 #include "track/hand_rig.h"
 
+#include "dynahand/model_world.h"
+
 #include <cmath>
 #include <numbers>
 
@@ -18,12 +20,7 @@ constexpr std::array<std::array<const char*, 3>, kFingerCount> kBodyEndKeypoint 
 
 }  // namespace
 
-Quat HandRig::modelToPhysics() {
-  // Columns: physics x, y, z expressed in the model joint frame = (z, -y, x).
-  Mat3 m;
-  m << 0, 0, 1, 0, -1, 0, 1, 0, 0;
-  return Quat(m);
-}
+Quat HandRig::modelToPhysics() { return model::modelToPhysicsFrame(); }
 
 Result<HandRig> HandRig::create(const model::ArticulatedModel& model,
                                 const physics::WorldSettings& worldSettings,
@@ -72,33 +69,15 @@ Result<HandRig> HandRig::create(const model::ArticulatedModel& model,
     if (toElbow.norm() < 1e-4f) return Error{"the forearm's centroid is at the wrist"};
     a.forearmAxis = toElbow.normalized();
   }
-  const float linearDamping = physics::dampingFromRetention(settings.velocityRetention, stepDt);
+  // Bodies, joints with limits and the collision filter as the model defines them; the
+  // tracker's own masses (the original used 1 per bone, heavier palm and wrist) and damping.
+  model::WorldBuildOptions build;
+  build.linearDamping = physics::dampingFromRetention(settings.velocityRetention, stepDt);
+  build.angularDamping = build.linearDamping;
+  const model::ModelInWorld ids = model::addToWorld(world, model, rest, build);
   for (int b = 0; b < n; ++b) {
-    const auto& body = model.bodies()[static_cast<std::size_t>(b)];
-    physics::BodyDef def;
-    def.shape = world.addShape(body.shape);
-    def.pose = rest.bodies[static_cast<std::size_t>(b)];
-    def.mass = b == a.forearm ? settings.forearmMass : (b == a.palm ? settings.palmMass : settings.boneMass);
-    def.linearDamping = linearDamping;
-    def.angularDamping = linearDamping;
-    world.addBody(def);
-  }
-  const Quat q = modelToPhysics();
-  for (const auto& joint : model.joints()) {
-    physics::JointDef def;
-    def.parent = joint.parent;
-    def.child = joint.child;
-    def.anchorParent = joint.anchorParent;
-    def.anchorChild = joint.anchorChild;
-    def.frameParent = (joint.frame * q).normalized();
-    def.frameChild = q;
-    def.limitsEnabled = true;
-    def.lower = Vec3(joint.minAngle.x(), -joint.maxAngle.y(), joint.minAngle.z());
-    def.upper = Vec3(joint.maxAngle.x(), -joint.minAngle.y(), joint.maxAngle.z());
-    world.addJoint(def);
-  }
-  for (int i = 0; i < n; ++i) {
-    for (int j = i + 1; j < n; ++j) world.setCollisionEnabled(i, j, model.collides(i, j));
+    if (ids.bodies[static_cast<std::size_t>(b)] != b) return Error{"unexpected body order in the physics world"};
+    world.setMass(b, b == a.forearm ? settings.forearmMass : (b == a.palm ? settings.palmMass : settings.boneMass));
   }
   // Grasp bias: neighbouring fingers' middle and distal bones within a cone (index..pinky).
   const float cone = settings.graspConeDeg * std::numbers::pi_v<float> / 180.0f;

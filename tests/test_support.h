@@ -17,9 +17,9 @@ inline std::filesystem::path sharedDataDir() {
 }
 
 // Skips the current test with a clear message when ../shared/data is absent.
-#define DYNAHAND_REQUIRE_SHARED_DATA(dirVar)                                              \
-  const std::filesystem::path dirVar = ::dynahand::test::sharedDataDir();                 \
-  if (dirVar.empty())                                                                     \
+#define DYNAHAND_REQUIRE_SHARED_DATA(dirVar)                              \
+  const std::filesystem::path dirVar = ::dynahand::test::sharedDataDir(); \
+  if (dirVar.empty())                                                     \
   GTEST_SKIP() << "../shared/data not found (set DYNAHAND_SHARED_DIR); skipping data test"
 
 // A fresh scratch folder under the build tree for files a test writes.

@@ -62,7 +62,9 @@ int runTrack(const TrackOptions& o) {
   const int last = o.frames < 0 ? info.frameCount : std::min(info.frameCount, first + o.frames);
   if (o.init == "gt") {
     const auto gt = reader->groundTruth(first);
-    if (!gt) throw UsageError("--init gt: " + o.input + " has no ground truth for frame " + std::to_string(first));
+    if (!gt)
+      throw UsageError("--init gt: " + o.input + " has no ground truth for frame " +
+                       std::to_string(first));
     const Status s = (*tracker)->initializeFromKeypoints(*gt);
     if (!s) throw std::runtime_error("--init gt: " + s.message());
   } else if (o.init != "auto") {
@@ -119,11 +121,13 @@ int runTrack(const TrackOptions& o) {
     }
     if (info.hasGroundTruth) {
       accuracy.groundTruth.push_back(reader->groundTruth(f));
-      accuracy.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21) : std::nullopt);
+      accuracy.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
+                                             : std::nullopt);
     }
     ++done;
     char extra[64];
-    std::snprintf(extra, sizeof extra, "%s err %.0f mm", h.tracked ? "tracked" : "lost", 1000.0 * static_cast<double>(h.error));
+    std::snprintf(extra, sizeof extra, "%s err %.0f mm", h.tracked ? "tracked" : "lost",
+                  1000.0 * static_cast<double>(h.error));
     progress.update(done, extra);
   }
   progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
@@ -134,15 +138,18 @@ int runTrack(const TrackOptions& o) {
     if (!s) throw std::runtime_error(s.message());
   }
 
-  std::printf("frames %d  tracked %d (%.1f%%)\n", done, trackedFrames, done ? 100.0 * trackedFrames / done : 0.0);
-  std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n", eval::percentile(times, 0.5),
-              eval::percentile(times, 0.99), eval::percentile(times, 0.5) > 0 ? 1000.0 / eval::percentile(times, 0.5) : 0.0);
+  std::printf("frames %d  tracked %d (%.1f%%)\n", done, trackedFrames,
+              done ? 100.0 * trackedFrames / done : 0.0);
+  std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n",
+              eval::percentile(times, 0.5), eval::percentile(times, 0.99),
+              eval::percentile(times, 0.5) > 0 ? 1000.0 / eval::percentile(times, 0.5) : 0.0);
   if (info.hasGroundTruth && done > 0) {
     auto m = eval::computeKeypointMetrics(accuracy);
     if (m) {
-      std::printf("21-keypoint error vs ground truth  mean %.2f mm  median %.2f mm  p95 %.2f mm  "
-                  "max-joint<=30mm %.1f%% of frames\n",
-                  m->meanMm, m->medianMm, m->p95Mm, 100.0 * m->successFraction[2]);
+      std::printf(
+          "21-keypoint error vs ground truth  mean %.2f mm  median %.2f mm  p95 %.2f mm  "
+          "max-joint<=30mm %.1f%% of frames\n",
+          m->meanMm, m->medianMm, m->p95Mm, 100.0 * m->successFraction[2]);
     }
   }
   for (const auto* path : {&o.out, &o.csv, &o.bvh}) {
@@ -155,31 +162,40 @@ const CommandRegistration kRegistration{Command{
     "track", "track hands in a depth recording and write their poses",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<TrackOptions>();
-      sub.add_option("input", o->input, "sequence folder (canonical layout), .rs/.json recording, PNG folder or .oni")
+      sub.add_option("input", o->input,
+                     "sequence folder (canonical layout), .rs/.json recording, PNG folder or .oni")
           ->required();
       sub.add_option("-o,--out", o->out, "poses as JSON lines (.jsonl) or CSV (.csv)");
       sub.add_option("--csv", o->csv, "also write the 21 keypoints as CSV");
       sub.add_option("--bvh", o->bvh, "also write a BVH skeleton animation");
       sub.add_option("--model", o->modelFile, "hand model file (default: the built-in hand)");
-      sub.add_option("--hand-length", o->handLength, "built-in hand: wrist crease to middle fingertip, m")
+      sub.add_option("--hand-length", o->handLength,
+                     "built-in hand: wrist crease to middle fingertip, m")
           ->check(CLI::Range(0.10f, 0.30f));
       sub.add_option("--hand-width", o->handWidth, "built-in hand: palm width at the knuckles, m")
           ->check(CLI::Range(0.05f, 0.15f));
-      sub.add_option("--init", o->init, "gt (ground truth of the first frame), auto, or a pose JSONL file");
+      sub.add_option("--init", o->init,
+                     "gt (ground truth of the first frame), auto, or a pose JSONL file");
       sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));
-      sub.add_option("--threads", o->threads, "worker threads (results are identical for any count)")
+      sub.add_option("--threads", o->threads,
+                     "worker threads (results are identical for any count)")
           ->check(CLI::Range(1, 64));
       sub.add_option("--start", o->start, "first frame")->check(CLI::NonNegativeNumber);
-      sub.add_option("--frames", o->frames, "number of frames (default: all)")->check(CLI::Range(1, 100000000));
-      sub.add_flag("--per-frame", o->perFrame, "acquire every frame afresh (frames far apart in time)");
-      sub.add_flag("--candidates", o->candidates, "write every simulation's error into the JSON lines");
+      sub.add_option("--frames", o->frames, "number of frames (default: all)")
+          ->check(CLI::Range(1, 100000000));
+      sub.add_flag("--per-frame", o->perFrame,
+                   "acquire every frame afresh (frames far apart in time)");
+      sub.add_flag("--candidates", o->candidates,
+                   "write every simulation's error into the JSON lines");
       sub.add_option("--disable", o->disable,
-                     "simulations to switch off: normal, gross_motion, grasp_bias, finger_flip, feature_detection");
+                     "simulations to switch off: normal, gross_motion, grasp_bias, finger_flip, "
+                     "feature_detection");
       sub.footer(
           "Examples:\n"
           "  dynahand track clip/ --out poses.jsonl\n"
           "  dynahand track clip/ --init gt --out poses.jsonl --bvh hand.bvh\n"
-          "  dynahand track ../shared/data/sr305-hands/20210326-230536 --per-frame --out fits.jsonl");
+          "  dynahand track ../shared/data/sr305-hands/20210326-230536 --per-frame --out "
+          "fits.jsonl");
       return [o] { return runTrack(*o); };
     }}};
 

@@ -9,8 +9,9 @@
 
 int main(int argc, char** argv) {
   using namespace dynahand::cli;
-  CLI::App app{"dynahand: dynamics-based 3D skeletal hand tracking from depth cameras.\n"
-               "Run 'dynahand COMMAND --help' for a command's options and examples."};
+  CLI::App app{
+      "dynahand: dynamics-based 3D skeletal hand tracking from depth cameras.\n"
+      "Run 'dynahand COMMAND --help' for a command's options and examples."};
   app.set_version_flag("--version", std::string("dynahand ") + DYNAHAND_VERSION);
   int verbosity = 2;
   app.add_option("-v,--verbosity", verbosity, "log level: 0 errors, 1 warnings, 2 info, 3 debug")

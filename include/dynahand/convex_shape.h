@@ -31,8 +31,8 @@ class ConvexShape {
   const std::vector<Vec3>& vertices() const { return vertices_; }  // hull vertices, m
   const std::vector<Face>& faces() const { return faces_; }
 
-  float volume() const { return volume_; }       // m^3
-  Vec3 centroid() const { return centroid_; }    // centre of mass of the uniform solid, m
+  float volume() const { return volume_; }     // m^3
+  Vec3 centroid() const { return centroid_; }  // centre of mass of the uniform solid, m
   // Inertia tensor about the centroid, body axes, for a uniform solid of this mass (kg m^2).
   Mat3 inertiaAboutCentroid(float mass) const { return unitInertia_ * mass; }
   // Largest sphere about the centroid inside the hull (distance to the nearest face plane), m.

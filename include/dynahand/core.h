@@ -24,7 +24,7 @@ using Isometry = Eigen::Isometry3f;
 
 // A rigid transform: x_world = q * x_local + p. Plain data; q is kept unit length.
 struct Pose {
-  Vec3 p = Vec3::Zero();     // position, m
+  Vec3 p = Vec3::Zero();      // position, m
   Quat q = Quat::Identity();  // orientation, unit quaternion
 
   static Pose identity() { return {}; }
@@ -58,7 +58,7 @@ struct Error {
 template <class T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : data_(std::move(value)) {}  // NOLINT(google-explicit-constructor)
+  Result(T value) : data_(std::move(value)) {}      // NOLINT(google-explicit-constructor)
   Result(Error error) : data_(std::move(error)) {}  // NOLINT(google-explicit-constructor)
 
   bool ok() const { return data_.index() == 0; }

@@ -36,9 +36,9 @@ struct KeypointMetrics {
   int evaluatedFrames = 0;  // frames with ground truth and a prediction
   int visibleFrames = 0;    // frames with ground truth
   double meanMm = 0, medianMm = 0, p95Mm = 0, maxMm = 0;  // over all joints of evaluated frames
-  std::array<double, 21> perJointMeanMm{};               // mean error of each keypoint
-  std::vector<double> perFrameMeanMm;  // (frames), NaN where not evaluated
-  std::vector<double> perFrameMaxMm;   // (frames), NaN where not evaluated
+  std::array<double, 21> perJointMeanMm{};                // mean error of each keypoint
+  std::vector<double> perFrameMeanMm;                     // (frames), NaN where not evaluated
+  std::vector<double> perFrameMaxMm;                      // (frames), NaN where not evaluated
   std::vector<double> successThresholdsMm;
   // Fraction of visible frames whose maximum joint error is under each threshold (a
   // missing prediction counts as a failure): the standard hand-pose success curve.

@@ -39,11 +39,13 @@ void drawSkeleton(RgbImage& image, const Intrinsics& camera, const std::array<Ve
 void drawModel(RgbImage& image, const Intrinsics& camera, const model::ArticulatedModel& model,
                const model::ModelPose& pose, Rgb colour, float opacity = 1.0f);
 // Text in the top-left corner (or at row `line`).
-void drawLabel(RgbImage& image, const std::string& text, int line = 0, Rgb colour = {255, 255, 255});
+void drawLabel(RgbImage& image, const std::string& text, int line = 0,
+               Rgb colour = {255, 255, 255});
 // The window of `image` around a set of points (with a margin in pixels), scaled to
 // tileWidth x tileHeight, keeping the aspect ratio.
-RgbImage cropAround(const RgbImage& image, const Intrinsics& camera, const std::vector<Vec3>& points,
-                    int marginPixels, int tileWidth, int tileHeight);
+RgbImage cropAround(const RgbImage& image, const Intrinsics& camera,
+                    const std::vector<Vec3>& points, int marginPixels, int tileWidth,
+                    int tileHeight);
 // Tiles of equal size in rows of `columns`.
 RgbImage contactSheet(const std::vector<RgbImage>& tiles, int columns);
 

@@ -44,19 +44,19 @@ struct WorldSettings {
   // Nonlinear Gauss-Seidel passes that move positions (not velocities) to close the joint
   // anchors after integration: removes the arc error of linearised rotation without momentum.
   int positionIterations = 4;
-  float jointErp = 0.5f;              // fraction of joint position error removed per step, [0, 1]
+  float jointErp = 0.5f;    // fraction of joint position error removed per step, [0, 1]
   float contactErp = 0.2f;  // fraction of penetration (beyond linearSlop) removed per step
   // Optional soft contact instead of contactErp (Box2D v3 soft step): push-out spring, Hz
   // (0: rigid rows with contactErp) and its damping ratio.
   float contactHertz = 0.0f;
   float contactDampingRatio = 10.0f;
-  int contactInnerIterations = 4;  // passes over one contact manifold per sweep (load spreading)
-  float limitErp = 0.5f;              // same for angular-limit violation
-  float surfaceErp = 0.5f;            // same for the tracker's surface/boundary rows
-  float linearSlop = 1e-4f;           // m of penetration left uncorrected (prevents jitter)
-  float maxCorrectionSpeed = 2.0f;    // m/s cap on contact push-out velocity
-  float contactMargin = 2e-3f;        // m; pairs closer than this get speculative contacts
-  float friction = 0.5f;              // Coulomb coefficient for contacts (0: frictionless)
+  int contactInnerIterations = 4;   // passes over one contact manifold per sweep (load spreading)
+  float limitErp = 0.5f;            // same for angular-limit violation
+  float surfaceErp = 0.5f;          // same for the tracker's surface/boundary rows
+  float linearSlop = 1e-4f;         // m of penetration left uncorrected (prevents jitter)
+  float maxCorrectionSpeed = 2.0f;  // m/s cap on contact push-out velocity
+  float contactMargin = 2e-3f;      // m; pairs closer than this get speculative contacts
+  float friction = 0.5f;            // Coulomb coefficient for contacts (0: frictionless)
   bool enableContacts = true;
   bool gyroscopic = true;          // implicit gyroscopic torque (conserves spin energy)
   bool filterJointedPairs = true;  // bodies joined by a joint never collide

@@ -22,8 +22,8 @@ spdlog::logger& logger() {
 }  // namespace log
 
 void setLogLevel(int level) {
-  static constexpr spdlog::level::level_enum kLevels[] = {spdlog::level::err, spdlog::level::warn,
-                                                          spdlog::level::info, spdlog::level::debug};
+  static constexpr spdlog::level::level_enum kLevels[] = {
+      spdlog::level::err, spdlog::level::warn, spdlog::level::info, spdlog::level::debug};
   log::logger().set_level(kLevels[std::clamp(level, 0, 3)]);
 }
 

@@ -12,7 +12,8 @@ using nlohmann::json;
 constexpr int kMaxFrames = 10'000'000;  // guards against absurd frame numbers
 
 Result<Keypoints21> parseKeypoints(const json& value) {
-  if (!value.is_array() || value.size() != 21) return Error{"keypoints21 must be 21 [x,y,z] arrays"};
+  if (!value.is_array() || value.size() != 21)
+    return Error{"keypoints21 must be 21 [x,y,z] arrays"};
   Keypoints21 k;
   for (int j = 0; j < 21; ++j) {
     const json& p = value[static_cast<std::size_t>(j)];

@@ -7,9 +7,9 @@
 namespace dynahand::eval {
 
 const std::array<const char*, 21> kKeypointNames = {
-    "wrist",      "thumb_cmc",  "thumb_mcp",  "thumb_ip",   "thumb_tip",  "index_mcp", "index_pip",
-    "index_dip",  "index_tip",  "middle_mcp", "middle_pip", "middle_dip", "middle_tip", "ring_mcp",
-    "ring_pip",   "ring_dip",   "ring_tip",   "pinky_mcp",  "pinky_pip",  "pinky_dip", "pinky_tip"};
+    "wrist",     "thumb_cmc", "thumb_mcp",  "thumb_ip",   "thumb_tip",  "index_mcp",  "index_pip",
+    "index_dip", "index_tip", "middle_mcp", "middle_pip", "middle_dip", "middle_tip", "ring_mcp",
+    "ring_pip",  "ring_dip",  "ring_tip",   "pinky_mcp",  "pinky_pip",  "pinky_dip",  "pinky_tip"};
 
 namespace {
 
@@ -65,8 +65,10 @@ Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& s,
   for (std::size_t f = 0; f < n; ++f) {
     const auto& gt = s.groundTruth[f];
     const auto& pr = s.predicted[f];
-    if (gt && !allFinite(*gt)) return Error{"ground truth frame " + std::to_string(f) + " is not finite"};
-    if (pr && !allFinite(*pr)) return Error{"predicted frame " + std::to_string(f) + " is not finite"};
+    if (gt && !allFinite(*gt))
+      return Error{"ground truth frame " + std::to_string(f) + " is not finite"};
+    if (pr && !allFinite(*pr))
+      return Error{"predicted frame " + std::to_string(f) + " is not finite"};
     if (!gt) continue;
     ++m.visibleFrames;
     if (!pr) {

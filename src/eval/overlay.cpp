@@ -8,22 +8,26 @@ namespace dynahand::eval {
 
 namespace {
 
-cv::Mat wrap(RgbImage& image) { return cv::Mat(image.height, image.width, CV_8UC3, image.pixels.data()); }
-cv::Mat wrap(const RgbImage& image) {
-  return cv::Mat(image.height, image.width, CV_8UC3, const_cast<std::uint8_t*>(image.pixels.data()));
+cv::Mat wrap(RgbImage& image) {
+  return cv::Mat(image.height, image.width, CV_8UC3, image.pixels.data());
 }
-cv::Scalar scalar(Rgb c) { return cv::Scalar(c.r, c.g, c.b); }  // images are RGB in memory
+cv::Mat wrap(const RgbImage& image) {
+  return cv::Mat(image.height, image.width, CV_8UC3,
+                 const_cast<std::uint8_t*>(image.pixels.data()));
+}
+cv::Scalar scalar(Rgb c) {
+  return cv::Scalar(c.r, c.g, c.b);
+}  // images are RGB in memory
 cv::Point pixel(const Intrinsics& k, const Vec3& p) {
   const Vec2 uv = k.project(p);
   return {static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y()))};
 }
 
 // MediaPipe hand connections.
-constexpr std::array<std::array<int, 2>, 21> kBones = {{{0, 1},   {1, 2},   {2, 3},   {3, 4},   {0, 5},
-                                                        {5, 6},   {6, 7},   {7, 8},   {5, 9},   {9, 10},
-                                                        {10, 11}, {11, 12}, {9, 13},  {13, 14}, {14, 15},
-                                                        {15, 16}, {13, 17}, {0, 17},  {17, 18}, {18, 19},
-                                                        {19, 20}}};
+constexpr std::array<std::array<int, 2>, 21> kBones = {
+    {{0, 1},   {1, 2},   {2, 3},   {3, 4},   {0, 5},   {5, 6},   {6, 7},
+     {7, 8},   {5, 9},   {9, 10},  {10, 11}, {11, 12}, {9, 13},  {13, 14},
+     {14, 15}, {15, 16}, {13, 17}, {0, 17},  {17, 18}, {18, 19}, {19, 20}}};
 
 }  // namespace
 
@@ -50,7 +54,8 @@ RgbImage shadeDepth(const DepthFrame& depth, float nearM, float farM) {
     for (int u = 0; u < depth.width; ++u) {
       const float z = depth.metres(u, v);
       grey.at<std::uint8_t>(v, u) =
-          z > 0 ? static_cast<std::uint8_t>(255.0f * std::clamp((z - nearM) / span, 0.0f, 1.0f)) : 0;
+          z > 0 ? static_cast<std::uint8_t>(255.0f * std::clamp((z - nearM) / span, 0.0f, 1.0f))
+                : 0;
     }
   }
   cv::Mat colour;
@@ -65,8 +70,8 @@ RgbImage shadeDepth(const DepthFrame& depth, float nearM, float farM) {
   return out;
 }
 
-void drawSkeleton(RgbImage& image, const Intrinsics& camera, const std::array<Vec3, 21>& k, Rgb colour,
-                  int thickness) {
+void drawSkeleton(RgbImage& image, const Intrinsics& camera, const std::array<Vec3, 21>& k,
+                  Rgb colour, int thickness) {
   cv::Mat m = wrap(image);
   for (const auto& bone : kBones) {
     const Vec3& a = k[static_cast<std::size_t>(bone[0])];
@@ -92,25 +97,30 @@ void drawModel(RgbImage& image, const Intrinsics& camera, const model::Articulat
       if (p.rotate(face.normal).dot(centre) > 0) continue;
       for (std::size_t i = 0; i < face.vertices.size(); ++i) {
         const Vec3 a = p.transform(shape.vertices()[static_cast<std::size_t>(face.vertices[i])]);
-        const Vec3 c = p.transform(shape.vertices()[static_cast<std::size_t>(face.vertices[(i + 1) % face.vertices.size()])]);
+        const Vec3 c = p.transform(shape.vertices()[static_cast<std::size_t>(
+            face.vertices[(i + 1) % face.vertices.size()])]);
         if (a.z() <= 0 || c.z() <= 0) continue;
         cv::line(layer, pixel(camera, a), pixel(camera, c), scalar(colour), 1, cv::LINE_AA);
       }
     }
   }
-  cv::addWeighted(layer, static_cast<double>(opacity), m, 1.0 - static_cast<double>(opacity), 0.0, m);
+  cv::addWeighted(layer, static_cast<double>(opacity), m, 1.0 - static_cast<double>(opacity), 0.0,
+                  m);
 }
 
 void drawLabel(RgbImage& image, const std::string& text, int line, Rgb colour) {
   cv::Mat m = wrap(image);
   const double scale = std::max(0.35, image.width / 900.0);
   const int y = static_cast<int>((line + 1) * 16 * scale / 0.4);
-  cv::putText(m, text, cv::Point(4, y), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
-  cv::putText(m, text, cv::Point(4, y), cv::FONT_HERSHEY_SIMPLEX, scale, scalar(colour), 1, cv::LINE_AA);
+  cv::putText(m, text, cv::Point(4, y), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 3,
+              cv::LINE_AA);
+  cv::putText(m, text, cv::Point(4, y), cv::FONT_HERSHEY_SIMPLEX, scale, scalar(colour), 1,
+              cv::LINE_AA);
 }
 
-RgbImage cropAround(const RgbImage& image, const Intrinsics& camera, const std::vector<Vec3>& points,
-                    int marginPixels, int tileWidth, int tileHeight) {
+RgbImage cropAround(const RgbImage& image, const Intrinsics& camera,
+                    const std::vector<Vec3>& points, int marginPixels, int tileWidth,
+                    int tileHeight) {
   int x0 = image.width, y0 = image.height, x1 = 0, y1 = 0;
   for (const Vec3& p : points) {
     if (p.z() <= 0) continue;
@@ -125,7 +135,10 @@ RgbImage cropAround(const RgbImage& image, const Intrinsics& camera, const std::
   const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
   double w = x1 - x0 + 2.0 * marginPixels, h = y1 - y0 + 2.0 * marginPixels;
   const double aspect = static_cast<double>(tileWidth) / tileHeight;
-  if (w / h < aspect) w = h * aspect; else h = w / aspect;
+  if (w / h < aspect)
+    w = h * aspect;
+  else
+    h = w / aspect;
   w = std::min(w, static_cast<double>(image.width));
   h = std::min(h, static_cast<double>(image.height));
   const int rx = std::clamp(static_cast<int>(cx - w / 2), 0, image.width - static_cast<int>(w));

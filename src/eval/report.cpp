@@ -85,8 +85,9 @@ std::string series(const PlotFrame& f, const std::vector<double>& ys, const char
   std::string s, points;
   auto flush = [&] {
     if (!points.empty()) {
-      s += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
-                       colour, points);
+      s += fmt::format(
+          "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n", colour,
+          points);
     }
     points.clear();
   };
@@ -95,8 +96,8 @@ std::string series(const PlotFrame& f, const std::vector<double>& ys, const char
       flush();
       continue;
     }
-    points += fmt::format("{:.1f},{:.1f} ", f.px(static_cast<double>(i)),
-                          f.py(std::min(ys[i], f.yMax)));
+    points +=
+        fmt::format("{:.1f},{:.1f} ", f.px(static_cast<double>(i)), f.py(std::min(ys[i], f.yMax)));
   }
   flush();
   return s;

@@ -23,7 +23,8 @@ constexpr float kDegPerRad = 180.0f / std::numbers::pi_v<float>;
 // (z, x, y) angles, rad, with R = Rz(z) Rx(x) Ry(y).
 Vec3 eulerZXY(const Quat& q) {
   const Mat3 r = q.toRotationMatrix();
-  // R(2,1) = sin x; R(0,1) = -sin z cos x; R(1,1) = cos z cos x; R(2,0) = -cos x sin y; R(2,2) = cos x cos y.
+  // R(2,1) = sin x; R(0,1) = -sin z cos x; R(1,1) = cos z cos x; R(2,0) = -cos x sin y; R(2,2) =
+  // cos x cos y.
   const float x = std::asin(std::clamp(r(2, 1), -1.0f, 1.0f));
   float z, y;
   if (std::abs(r(2, 1)) < 0.9999f) {
@@ -97,12 +98,17 @@ std::string BvhWriter::text() const {
       s += fmt::format("{}ROOT {}\n{}{{\n", indent, safeName(name), indent);
     } else {
       const int j = m.bodies()[static_cast<std::size_t>(b)].joint;
-      offset = (m.joints()[static_cast<std::size_t>(j)].anchorParent - jointOrigin(m, parent)) * kCmPerM;
+      offset =
+          (m.joints()[static_cast<std::size_t>(j)].anchorParent - jointOrigin(m, parent)) * kCmPerM;
       s += fmt::format("{}JOINT {}\n{}{{\n", indent, safeName(name), indent);
     }
-    s += fmt::format("{}  OFFSET {:.6f} {:.6f} {:.6f}\n", indent, offset.x(), offset.y(), offset.z());
-    s += parent < 0 ? fmt::format("{}  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n", indent)
-                    : fmt::format("{}  CHANNELS 3 Zrotation Xrotation Yrotation\n", indent);
+    s += fmt::format("{}  OFFSET {:.6f} {:.6f} {:.6f}\n", indent, offset.x(), offset.y(),
+                     offset.z());
+    s += parent < 0
+             ? fmt::format(
+                   "{}  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n",
+                   indent)
+             : fmt::format("{}  CHANNELS 3 Zrotation Xrotation Yrotation\n", indent);
     const auto& kids = children[static_cast<std::size_t>(b)];
     if (kids.empty()) {
       // End site: the farthest hull vertex from the joint (the fingertip for a finger).
@@ -113,8 +119,8 @@ std::string BvhWriter::text() const {
         if ((v - origin).squaredNorm() > (tip - origin).squaredNorm()) tip = v;
       }
       const Vec3 end = (tip - origin) * kCmPerM;
-      s += fmt::format("{}  End Site\n{}  {{\n{}    OFFSET {:.6f} {:.6f} {:.6f}\n{}  }}\n", indent, indent,
-                       indent, end.x(), end.y(), end.z(), indent);
+      s += fmt::format("{}  End Site\n{}  {{\n{}    OFFSET {:.6f} {:.6f} {:.6f}\n{}  }}\n", indent,
+                       indent, indent, end.x(), end.y(), end.z(), indent);
     }
     for (int c : kids) self(self, c, depth + 1);
     s += indent + "}\n";
@@ -128,15 +134,17 @@ std::string BvhWriter::text() const {
     channelStart[static_cast<std::size_t>(b)] = at;
     at += m.bodies()[static_cast<std::size_t>(b)].parent < 0 ? 6 : 3;
   }
-  s += fmt::format("MOTION\nFrames: {}\nFrame Time: {:.6f}\n", frames_.size(), 1.0 / static_cast<double>(fps_));
+  s += fmt::format("MOTION\nFrames: {}\nFrame Time: {:.6f}\n", frames_.size(),
+                   1.0 / static_cast<double>(fps_));
   for (const auto& frame : frames_) {
     std::string line;
     for (int b : hierarchyOrder) {
       const int count = m.bodies()[static_cast<std::size_t>(b)].parent < 0 ? 6 : 3;
       for (int c = 0; c < count; ++c) {
         if (!line.empty()) line += ' ';
-        fmt::format_to(std::back_inserter(line), "{:.5f}",
-                       frame[static_cast<std::size_t>(channelStart[static_cast<std::size_t>(b)] + c)]);
+        fmt::format_to(
+            std::back_inserter(line), "{:.5f}",
+            frame[static_cast<std::size_t>(channelStart[static_cast<std::size_t>(b)] + c)]);
       }
     }
     s += line + '\n';

@@ -26,7 +26,9 @@ void appendNumber(std::string& s, float v) {
   }
 }
 
-const char* sideName(model::Side side) { return side == model::Side::Right ? "right" : "left"; }
+const char* sideName(model::Side side) {
+  return side == model::Side::Right ? "right" : "left";
+}
 
 }  // namespace
 
@@ -34,7 +36,8 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
                               const JsonOptions& o) {
   std::string s;
   s.reserve(4096);
-  fmt::format_to(std::back_inserter(s), "{{\"version\":{},\"frame\":{},\"time_ms\":{:.3f},\"hands\":[",
+  fmt::format_to(std::back_inserter(s),
+                 "{{\"version\":{},\"frame\":{},\"time_ms\":{:.3f},\"hands\":[",
                  kTrackFormatVersion, r.frame, r.timeMs);
   for (std::size_t h = 0; h < r.hands.size(); ++h) {
     const track::HandResult& hand = r.hands[h];
@@ -83,7 +86,8 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
     s += ",\"error_occlusion\":";
     appendNumber(s, hand.occlusionError);
     fmt::format_to(std::back_inserter(s), ",\"simulation\":\"{}\",\"acquired\":{},\"points\":{}",
-                   track::strategyName(hand.simulation), hand.acquired ? "true" : "false", hand.pointCount);
+                   track::strategyName(hand.simulation), hand.acquired ? "true" : "false",
+                   hand.pointCount);
     if (o.candidates) {
       s += ",\"candidates\":[";
       bool first = true;
@@ -91,7 +95,8 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
         if (!c.ran) continue;
         if (!first) s += ',';
         first = false;
-        fmt::format_to(std::back_inserter(s), "{{\"simulation\":\"{}\",\"error\":", track::strategyName(c.kind));
+        fmt::format_to(std::back_inserter(s),
+                       "{{\"simulation\":\"{}\",\"error\":", track::strategyName(c.kind));
         appendNumber(s, c.error);
         if (o.candidatePoses && !c.pose.bodies.empty()) {
           s += ",\"bodies\":[";
@@ -150,8 +155,9 @@ Status TrackWriter::write(const track::TrackResult& r) {
     out_ << trackResultToJson(r, *model_, options_) << '\n';
   } else {
     for (const auto& hand : r.hands) {
-      std::string row = fmt::format("{},{:.3f},{},{},{:.6g},{}", r.frame, r.timeMs, sideName(hand.side),
-                                    hand.tracked ? 1 : 0, hand.error, track::strategyName(hand.simulation));
+      std::string row =
+          fmt::format("{},{:.3f},{},{},{:.6g},{}", r.frame, r.timeMs, sideName(hand.side),
+                      hand.tracked ? 1 : 0, hand.error, track::strategyName(hand.simulation));
       for (const Vec3& k : hand.keypoints21) {
         if (hand.tracked) {
           fmt::format_to(std::back_inserter(row), ",{:.6g},{:.6g},{:.6g}", k.x(), k.y(), k.z());

@@ -19,14 +19,14 @@ extern "C" {
 namespace dynahand::physics {
 namespace {
 
-constexpr int kMaxClip = 256;        // polygon vertices during clipping
+constexpr int kMaxClip = 256;         // polygon vertices during clipping
 constexpr float kMatchDist2 = 4e-6f;  // (2 mm)^2: a contact within this of last step's is the same
 
 struct CcdObject {
   const ConvexShape* shape;
-  Pose pose;       // body frame in world
-  Vec3 centre;     // a point inside (world centroid)
-  float inflate;   // m added along every support direction
+  Pose pose;      // body frame in world
+  Vec3 centre;    // a point inside (world centroid)
+  float inflate;  // m added along every support direction
 };
 
 void ccdSupport(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* out) {
@@ -101,11 +101,15 @@ int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
   int count = 0;
   bool overflow = incFace.vertices.size() + refFace.vertices.size() > kMaxClip;
   if (!overflow) {
-    for (int v : incFace.vertices) polyA[static_cast<std::size_t>(count++)] = incPose.transform(inc.vertices()[static_cast<std::size_t>(v)]);
+    for (int v : incFace.vertices)
+      polyA[static_cast<std::size_t>(count++)] =
+          incPose.transform(inc.vertices()[static_cast<std::size_t>(v)]);
     const std::size_t refCount = refFace.vertices.size();
     for (std::size_t e = 0; e < refCount && count > 0; ++e) {
-      const Vec3 p0 = refPose.transform(ref.vertices()[static_cast<std::size_t>(refFace.vertices[e])]);
-      const Vec3 p1 = refPose.transform(ref.vertices()[static_cast<std::size_t>(refFace.vertices[(e + 1) % refCount])]);
+      const Vec3 p0 =
+          refPose.transform(ref.vertices()[static_cast<std::size_t>(refFace.vertices[e])]);
+      const Vec3 p1 = refPose.transform(
+          ref.vertices()[static_cast<std::size_t>(refFace.vertices[(e + 1) % refCount])]);
       const Vec3 outward = (p1 - p0).cross(refNormal);
       int outCount = 0;
       for (int i = 0; i < count; ++i) {
@@ -121,7 +125,8 @@ int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
       std::swap(polyA, polyB);
     }
   }
-  const float refOffset = refNormal.dot(refPose.transform(ref.vertices()[static_cast<std::size_t>(refFace.vertices[0])]));
+  const float refOffset = refNormal.dot(
+      refPose.transform(ref.vertices()[static_cast<std::size_t>(refFace.vertices[0])]));
   std::array<ManifoldPoint, kMaxClip> candidates;
   int candidateCount = 0;
   for (int i = 0; i < (overflow ? 0 : count); ++i) {
@@ -133,7 +138,8 @@ int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
   if (candidateCount == 0) {
     // Edge-edge (or clipping lost everything): MPR's point and depth along its own normal.
     *normal = n;
-    const Vec3 p(static_cast<float>(pos.v[0]), static_cast<float>(pos.v[1]), static_cast<float>(pos.v[2]));
+    const Vec3 p(static_cast<float>(pos.v[0]), static_cast<float>(pos.v[1]),
+                 static_cast<float>(pos.v[2]));
     points[0] = {p, margin - static_cast<float>(depth)};
     return 1;
   }
@@ -157,13 +163,17 @@ int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
   };
   int deepest = 0;
   for (int i = 1; i < candidateCount; ++i) {
-    if (candidates[static_cast<std::size_t>(i)].separation < candidates[static_cast<std::size_t>(deepest)].separation) deepest = i;
+    if (candidates[static_cast<std::size_t>(i)].separation <
+        candidates[static_cast<std::size_t>(deepest)].separation)
+      deepest = i;
   }
   const ManifoldPoint p0 = candidates[static_cast<std::size_t>(deepest)];
   const ManifoldPoint p1 = pick([&](const Vec3& p) { return (p - p0.position).squaredNorm(); });
   const Vec3 diag = p1.position - p0.position;
-  const ManifoldPoint p2 = pick([&](const Vec3& p) { return refNormal.dot(diag.cross(p - p0.position)); });
-  const ManifoldPoint p3 = pick([&](const Vec3& p) { return -refNormal.dot(diag.cross(p - p0.position)); });
+  const ManifoldPoint p2 =
+      pick([&](const Vec3& p) { return refNormal.dot(diag.cross(p - p0.position)); });
+  const ManifoldPoint p3 =
+      pick([&](const Vec3& p) { return -refNormal.dot(diag.cross(p - p0.position)); });
   points[0] = p0;
   points[1] = p1;
   points[2] = p2;
@@ -190,18 +200,21 @@ void World::buildContacts(float h) {
       const int sa = m.slotOf(s, static_cast<BodyId>(i)), sb = m.slotOf(s, static_cast<BodyId>(j));
       if (sa == sb) continue;
       if (m.solverBodies[static_cast<std::size_t>(sa)].invMass == 0.0f &&
-          m.solverBodies[static_cast<std::size_t>(sb)].invMass == 0.0f) continue;
+          m.solverBodies[static_cast<std::size_t>(sb)].invMass == 0.0f)
+        continue;
       const float reach = m.bodies[i].boundingRadius + m.bodies[j].boundingRadius + margin;
       if ((s.position[i] - s.position[j]).squaredNorm() > reach * reach) continue;
       Vec3 nrm;
-      const int count = collideConvex(shapes_[static_cast<std::size_t>(m.bodies[i].shape)], pose(static_cast<BodyId>(i)),
-                                      shapes_[static_cast<std::size_t>(m.bodies[j].shape)], pose(static_cast<BodyId>(j)),
-                                      margin, manifold.data(), &nrm);
+      const int count = collideConvex(shapes_[static_cast<std::size_t>(m.bodies[i].shape)],
+                                      pose(static_cast<BodyId>(i)),
+                                      shapes_[static_cast<std::size_t>(m.bodies[j].shape)],
+                                      pose(static_cast<BodyId>(j)), margin, manifold.data(), &nrm);
       const auto key = static_cast<std::uint32_t>(i * n + j);
       while (cursor < s.contacts.size() && s.contacts[cursor].pair < key) ++cursor;
       for (int k = 0; k < count; ++k) {
         const ManifoldPoint& mp = manifold[static_cast<std::size_t>(k)];
-        WorldState::CachedContact cc{key, s.orientation[i].conjugate() * (mp.position - s.position[i]), 0.0f, 0.0f, 0.0f};
+        WorldState::CachedContact cc{
+            key, s.orientation[i].conjugate() * (mp.position - s.position[i]), 0.0f, 0.0f, 0.0f};
         float bestD2 = kMatchDist2;
         for (std::size_t o = cursor; o < s.contacts.size() && s.contacts[o].pair == key; ++o) {
           const float d2 = (s.contacts[o].localA - cc.localA).squaredNorm();
@@ -213,7 +226,8 @@ void World::buildContacts(float h) {
           }
         }
         m.newContacts.push_back(cc);
-        m.contactView.push_back({static_cast<BodyId>(i), static_cast<BodyId>(j), mp.position, nrm, mp.separation, 0.0f});
+        m.contactView.push_back({static_cast<BodyId>(i), static_cast<BodyId>(j), mp.position, nrm,
+                                 mp.separation, 0.0f});
       }
     }
   }
@@ -222,8 +236,7 @@ void World::buildContacts(float h) {
   const float invH = 1.0f / h;
   const float mu = settings_.friction;
   // Contact spring: at most a quarter of the step rate (stable), as Box2D v3.
-  const Softness contactSoft =
-      makeSoft(settings_.contactHertz, settings_.contactDampingRatio, h);
+  const Softness contactSoft = makeSoft(settings_.contactHertz, settings_.contactDampingRatio, h);
   const std::size_t firstContactRow = m.rows.size();
   for (std::size_t k = 0; k < m.contactView.size(); ++k) {
     const ContactPoint& c = m.contactView[k];
@@ -240,7 +253,8 @@ void World::buildContacts(float h) {
       bias = {c.separation * invH, c.separation * invH};
     } else {
       const float err = std::min(0.0f, c.separation + settings_.linearSlop);
-      const float rate = settings_.contactHertz > 0.0f ? contactSoft.biasRate : settings_.contactErp * invH;
+      const float rate =
+          settings_.contactHertz > 0.0f ? contactSoft.biasRate : settings_.contactErp * invH;
       bias = {std::max(rate * err, -settings_.maxCorrectionSpeed), 0.0f};
       soft = settings_.contactHertz > 0.0f;
     }
@@ -266,7 +280,9 @@ void World::buildContacts(float h) {
   const int inner = std::max(1, settings_.contactInnerIterations);
   for (std::size_t i = firstContactRow; i < m.rows.size();) {
     std::size_t j = i + 1;
-    while (j < m.rows.size() && m.rows[j].slotA == m.rows[i].slotA && m.rows[j].slotB == m.rows[i].slotB) ++j;
+    while (j < m.rows.size() && m.rows[j].slotA == m.rows[i].slotA &&
+           m.rows[j].slotB == m.rows[i].slotB)
+      ++j;
     m.rows[i].blockSize = static_cast<int>(j - i);
     m.rows[i].blockPasses = inner;
     i = j;

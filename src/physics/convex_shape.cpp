@@ -79,18 +79,20 @@ Result<ConvexShape> ConvexShape::fromPoints(std::span<const Vec3> points) {
   for (const Vec3& p : points) extent = std::max(extent, p.cwiseAbs().maxCoeff());
   char command[64];
   std::snprintf(command, sizeof command, "qhull C-%.3g", static_cast<double>(extent) * 1e-6);
-  const int exitCode = qh_new_qhull(qh, 3, static_cast<int>(points.size()), coords.data(),
-                                    False, command, nullptr, errors.file());
+  const int exitCode = qh_new_qhull(qh, 3, static_cast<int>(points.size()), coords.data(), False,
+                                    command, nullptr, errors.file());
   ConvexShape shape;
   std::string failure;
   if (exitCode != 0) {
-    failure = "convex shape: hull failed (points coplanar, collinear or degenerate): " +
-              errors.text();
+    failure =
+        "convex shape: hull failed (points coplanar, collinear or degenerate): " + errors.text();
   } else {
     // Hull vertices, renumbered in Qhull's point order so the result is deterministic.
     std::vector<int> remap(points.size(), -1);
     vertexT* vertex;
-    FORALLvertices { remap[static_cast<std::size_t>(qh_pointid(qh, vertex->point))] = 0; }
+    FORALLvertices {
+      remap[static_cast<std::size_t>(qh_pointid(qh, vertex->point))] = 0;
+    }
     for (std::size_t i = 0; i < points.size(); ++i) {
       if (remap[i] == 0) {
         remap[i] = static_cast<int>(shape.vertices_.size());
@@ -119,7 +121,8 @@ Result<ConvexShape> ConvexShape::fromPoints(std::span<const Vec3> points) {
   for (Face& face : shape.faces_) {
     const Vec3d n = face.normal.cast<double>();
     Vec3d centre = Vec3d::Zero();
-    for (int v : face.vertices) centre += shape.vertices_[static_cast<std::size_t>(v)].cast<double>();
+    for (int v : face.vertices)
+      centre += shape.vertices_[static_cast<std::size_t>(v)].cast<double>();
     centre /= static_cast<double>(face.vertices.size());
     const Vec3d u = n.unitOrthogonal();
     const Vec3d w = n.cross(u);
@@ -179,7 +182,8 @@ void ConvexShape::computeDerived() {
     const Vec3d a = vertices_[static_cast<std::size_t>(face.vertices[0])].cast<double>() - ref;
     for (std::size_t i = 1; i + 1 < face.vertices.size(); ++i) {
       const Vec3d b = vertices_[static_cast<std::size_t>(face.vertices[i])].cast<double>() - ref;
-      const Vec3d c = vertices_[static_cast<std::size_t>(face.vertices[i + 1])].cast<double>() - ref;
+      const Vec3d c =
+          vertices_[static_cast<std::size_t>(face.vertices[i + 1])].cast<double>() - ref;
       Mat3d edges;
       edges << a, b, c;
       const double det = edges.determinant();  // 6 x signed volume (CCW faces: positive)
@@ -202,7 +206,8 @@ void ConvexShape::computeDerived() {
     inscribedRadius_ = std::min(inscribedRadius_, face.offset - face.normal.dot(centroid_));
   }
   boundingRadius_ = 0.0f;
-  for (const Vec3& v : vertices_) boundingRadius_ = std::max(boundingRadius_, (v - centroid_).norm());
+  for (const Vec3& v : vertices_)
+    boundingRadius_ = std::max(boundingRadius_, (v - centroid_).norm());
 }
 
 Vec3 ConvexShape::closestOnFace(int f, const Vec3& p) const {
@@ -267,7 +272,9 @@ float ConvexShape::query(const Vec3& p, Vec3* closest, int* face) const {
   return std::sqrt(bestDist2);
 }
 
-float ConvexShape::signedDistance(const Vec3& p) const { return query(p, nullptr, nullptr); }
+float ConvexShape::signedDistance(const Vec3& p) const {
+  return query(p, nullptr, nullptr);
+}
 
 Vec3 ConvexShape::closestPoint(const Vec3& p) const {
   Vec3 q;

@@ -14,7 +14,9 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 struct Bias {
   float solve, relax;
 };
-inline Bias twoSidedBias(float c, float erp, float invH) { return {erp * c * invH, 0.0f}; }
+inline Bias twoSidedBias(float c, float erp, float invH) {
+  return {erp * c * invH, 0.0f};
+}
 inline Bias oneSidedBias(float c, float erp, float invH, float maxSpeed = kInf) {
   if (c > 0.0f) return {c * invH, c * invH};  // speculative: may approach, not cross
   return {std::max(erp * c * invH, -maxSpeed), 0.0f};
@@ -53,8 +55,8 @@ struct RowBuilder {
     r.slotB = slotB;
     r.invMassA = a.invMass;
     r.invMassB = b.invMass;
-    const float k = (a.invMass + b.invMass) * axis.squaredNorm() + angA.dot(r.invIAngA) +
-                    angB.dot(r.invIAngB);
+    const float k =
+        (a.invMass + b.invMass) * axis.squaredNorm() + angA.dot(r.invIAngA) + angB.dot(r.invIAngB);
     r.effMass = k > 0.0f ? 1.0f / k : 0.0f;
     r.bias = bias.solve;
     r.relaxBias = bias.relax;

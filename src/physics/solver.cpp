@@ -22,10 +22,9 @@
 namespace dynahand::physics {
 namespace {
 
-
 constexpr float kLimitMargin = 0.15f;  // rad: limit rows exist this close to a limit (plus motion)
 constexpr float kMaxRotationPerStep = 0.25f * 3.14159265f;  // rad
-constexpr float kMaxJointCorrection = 0.005f;  // m per projection pass
+constexpr float kMaxJointCorrection = 0.005f;               // m per projection pass
 
 Mat3 skew(const Vec3& v) {
   Mat3 m;
@@ -74,9 +73,9 @@ inline void solveRow(std::vector<SolverBody>& sb, std::vector<Row>& rows, Row& r
     upper = r.friction * rows[static_cast<std::size_t>(r.frictionOf)].impulse;
     lower = -upper;
   }
-  const float target = useBias ? r.impulse - r.effMass * r.massScale * (jv + r.bias) -
-                                     r.impulseScale * r.impulse
-                               : r.impulse - r.effMass * (jv + r.relaxBias);
+  const float target =
+      useBias ? r.impulse - r.effMass * r.massScale * (jv + r.bias) - r.impulseScale * r.impulse
+              : r.impulse - r.effMass * (jv + r.relaxBias);
   const float clamped = std::clamp(target, lower, upper);
   const float d = clamped - r.impulse;
   r.impulse = clamped;
@@ -129,7 +128,8 @@ void solvePointBlocks(std::vector<SolverBody>& sb, std::vector<World::Impl::Poin
   }
 }
 
-void solveSurfaceRows(std::vector<SolverBody>& sb, World::Impl& m, SurfaceRows& rows, bool useBias) {
+void solveSurfaceRows(std::vector<SolverBody>& sb, World::Impl& m, SurfaceRows& rows,
+                      bool useBias) {
   const std::size_t n = rows.body.size();
   const float* bias = useBias ? m.surfBias.data() : m.surfRelaxBias.data();
   for (std::size_t i = 0; i < n; ++i) {
@@ -137,7 +137,8 @@ void solveSurfaceRows(std::vector<SolverBody>& sb, World::Impl& m, SurfaceRows& 
     const Vec3& nrm = rows.normal[i];
     const float jv = nrm.dot(b.v) + m.surfAng[i].dot(b.w);
     const float old = rows.impulse[i];
-    const float clamped = std::clamp(old - m.surfEffMass[i] * (jv + bias[i]), rows.lower[i], rows.upper[i]);
+    const float clamped =
+        std::clamp(old - m.surfEffMass[i] * (jv + bias[i]), rows.lower[i], rows.upper[i]);
     const float d = clamped - old;
     rows.impulse[i] = clamped;
     b.v += (m.surfInvMass[i] * d) * nrm;
@@ -172,7 +173,8 @@ void projectJointPositions(World::Impl& m, int iterations) {
       if (!(std::abs(k.determinant()) > 1e-20f)) continue;
       // Large errors are closed over several steps (a projection is only good for small ones).
       const float len = c.norm();
-      const Vec3 clampedError = len > kMaxJointCorrection ? Vec3(c * (kMaxJointCorrection / len)) : c;
+      const Vec3 clampedError =
+          len > kMaxJointCorrection ? Vec3(c * (kMaxJointCorrection / len)) : c;
       const Vec3 p = -(k.inverse() * clampedError);
       m.slotPosition[ia] -= a.invMass * p;
       rotate(m.slotOrientation[ia], -(invIA * rA.cross(p)));
@@ -191,8 +193,12 @@ namespace {
 class FlushDenormals {
  public:
 #if defined(__SSE__)
-  FlushDenormals() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }  // FTZ | DAZ
-  ~FlushDenormals() { _mm_setcsr(saved_); }
+  FlushDenormals() : saved_(_mm_getcsr()) {
+    _mm_setcsr(saved_ | 0x8040u);
+  }  // FTZ | DAZ
+  ~FlushDenormals() {
+    _mm_setcsr(saved_);
+  }
 #endif
   FlushDenormals(const FlushDenormals&) = delete;
   FlushDenormals& operator=(const FlushDenormals&) = delete;
@@ -256,8 +262,9 @@ void World::step(float h) {
     const Mat3 r = grp.orientation.toRotationMatrix();
     setInvInertia(b, r * grp.inertiaLocal.inverse() * r.transpose());
     b.v = grp.linearVelocity + h * settings_.gravity;
-    b.w = settings_.gyroscopic ? gyroscopicStep(grp.angularVelocity, grp.orientation, grp.inertiaLocal, h)
-                               : grp.angularVelocity;
+    b.w = settings_.gyroscopic
+              ? gyroscopicStep(grp.angularVelocity, grp.orientation, grp.inertiaLocal, h)
+              : grp.angularVelocity;
     b.v *= 1.0f / (1.0f + h * linDamp / grp.mass);
     b.w *= 1.0f / (1.0f + h * angDamp / grp.mass);
   }
@@ -289,17 +296,20 @@ void World::step(float h) {
     const float fMax = c.driveMaxForce * h, tMax = c.driveMaxTorque * h;
     for (int k = 0; k < 3; ++k) {
       const Vec3 e = Vec3::Unit(k);
-      rb.add(dummy, slot, e, Vec3::Zero(), r.cross(e), {-linVel[k], 0.0f}, -fMax, fMax, 0.0f, false);
+      rb.add(dummy, slot, e, Vec3::Zero(), r.cross(e), {-linVel[k], 0.0f}, -fMax, fMax, 0.0f,
+             false);
     }
     for (int k = 0; k < 3; ++k) {
       const Vec3 e = Vec3::Unit(k);
-      rb.add(dummy, slot, Vec3::Zero(), Vec3::Zero(), e, {-angVel[k], 0.0f}, -tMax, tMax, 0.0f, false);
+      rb.add(dummy, slot, Vec3::Zero(), Vec3::Zero(), e, {-angVel[k], 0.0f}, -tMax, tMax, 0.0f,
+             false);
     }
   }
   // Joint drives: 3 angular motor rows towards the target relative rotation.
   for (const JointConfig& j : m.joints) {
     if (!j.driveEnabled) continue;
-    const auto pa = static_cast<std::size_t>(j.def.parent), pb = static_cast<std::size_t>(j.def.child);
+    const auto pa = static_cast<std::size_t>(j.def.parent),
+               pb = static_cast<std::size_t>(j.def.child);
     const int sa = slotOf(pa), sb = slotOf(pb);
     if (sa == sb) continue;
     const Quat desired = s.orientation[pa] * j.def.frameParent * j.driveTarget;
@@ -346,7 +356,8 @@ void World::step(float h) {
   for (std::size_t ji = 0; ji < m.joints.size(); ++ji) {
     const JointConfig& j = m.joints[ji];
     float* store = &s.jointImpulse[ji * kJointImpulses];
-    const auto pa = static_cast<std::size_t>(j.def.parent), pb = static_cast<std::size_t>(j.def.child);
+    const auto pa = static_cast<std::size_t>(j.def.parent),
+               pb = static_cast<std::size_t>(j.def.child);
     const int sa = slotOf(pa), sb = slotOf(pb);
     if (sa == sb) {  // welded together: the joint is internal to the group
       std::fill(store, store + kJointImpulses, 0.0f);
@@ -356,7 +367,8 @@ void World::step(float h) {
       const Quat frameA = s.orientation[pa] * j.def.frameParent;
       const Quat rel = frameA.conjugate() * (s.orientation[pb] * j.def.frameChild);
       const Vec3 angles = decomposeJointRotation(rel);
-      const Vec3 wRel = m.solverBodies[static_cast<std::size_t>(sb)].w - m.solverBodies[static_cast<std::size_t>(sa)].w;
+      const Vec3 wRel = m.solverBodies[static_cast<std::size_t>(sb)].w -
+                        m.solverBodies[static_cast<std::size_t>(sa)].w;
       const Vec3 d = rel * Vec3::UnitX();
       const float dxy2 = std::max(d.x() * d.x() + d.y() * d.y(), 1e-12f);
       // Rate axes (joint frame): d(angle)/dt = axis · (wB - wA) expressed in frame A.
@@ -407,7 +419,8 @@ void World::step(float h) {
   m.pointBlocks.clear();
   for (std::size_t ji = 0; ji < m.joints.size(); ++ji) {
     const JointConfig& j = m.joints[ji];
-    const auto pa = static_cast<std::size_t>(j.def.parent), pb = static_cast<std::size_t>(j.def.child);
+    const auto pa = static_cast<std::size_t>(j.def.parent),
+               pb = static_cast<std::size_t>(j.def.child);
     const int sa = slotOf(pa), sb = slotOf(pb);
     if (sa == sb) continue;
     float* store = &s.jointImpulse[ji * kJointImpulses];
@@ -415,14 +428,16 @@ void World::step(float h) {
     const Vec3 rA = armOf(pa, j.comAnchorParent, &worldA);
     const Vec3 rB = armOf(pb, j.comAnchorChild, &worldB);
     const Vec3 c = worldB - worldA;
-    m.jointPositions.push_back({sa, sb, m.slotOrientation[static_cast<std::size_t>(sa)].conjugate() * rA,
+    m.jointPositions.push_back({sa, sb,
+                                m.slotOrientation[static_cast<std::size_t>(sa)].conjugate() * rA,
                                 m.slotOrientation[static_cast<std::size_t>(sb)].conjugate() * rB});
     const SolverBody& a = m.solverBodies[static_cast<std::size_t>(sa)];
     const SolverBody& b = m.solverBodies[static_cast<std::size_t>(sb)];
     const Mat3 skA = skew(rA), skB = skew(rB);
     const Mat3 k = (a.invMass + b.invMass) * Mat3::Identity() - skA * invInertiaMatrix(a) * skA -
                    skB * invInertiaMatrix(b) * skB;
-    const Mat3 invK = std::abs(k.determinant()) > 1e-30f ? Mat3(k.inverse()) : Mat3::Zero();  // both static: inert
+    const Mat3 invK = std::abs(k.determinant()) > 1e-30f ? Mat3(k.inverse())
+                                                         : Mat3::Zero();  // both static: inert
     m.pointBlocks.push_back({sa, sb, rA, rB, invK, settings_.jointErp * invH * c,
                              Vec3(store[0], store[1], store[2]), store});
   }
@@ -464,7 +479,8 @@ void World::step(float h) {
   for (const Row& r : m.rows) {
     if (r.impulse != 0.0f) applyRowImpulse(m.solverBodies, r, r.impulse);
   }
-  for (const Impl::PointBlock& pb : m.pointBlocks) applyPointImpulse(m.solverBodies, pb, pb.impulse);
+  for (const Impl::PointBlock& pb : m.pointBlocks)
+    applyPointImpulse(m.solverBodies, pb, pb.impulse);
   for (int it = 0; it < settings_.iterations; ++it) {
     solveSurfaceRows(m.solverBodies, m, rows_, true);
     solveRows(m.solverBodies, m.rows, true);
@@ -521,7 +537,8 @@ void World::step(float h) {
     const WorldState::Group& grp = s.groups[static_cast<std::size_t>(g)];
     s.position[i] = grp.position + grp.orientation * s.memberOffset[i];
     s.orientation[i] = (grp.orientation * s.memberRotation[i]).normalized();
-    s.linearVelocity[i] = grp.linearVelocity + grp.angularVelocity.cross(s.position[i] - grp.position);
+    s.linearVelocity[i] =
+        grp.linearVelocity + grp.angularVelocity.cross(s.position[i] - grp.position);
     s.angularVelocity[i] = grp.angularVelocity;
   }
   ++s.stepCount;

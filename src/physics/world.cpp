@@ -8,7 +8,8 @@
 
 namespace dynahand::physics {
 
-World::World(const WorldSettings& settings) : settings_(settings), impl_(std::make_unique<Impl>()) {}
+World::World(const WorldSettings& settings)
+    : settings_(settings), impl_(std::make_unique<Impl>()) {}
 World::World(const World& other)
     : settings_(other.settings_),
       state_(other.state_),
@@ -79,9 +80,15 @@ BodyId World::addBody(const BodyDef& def) {
   return static_cast<BodyId>(oldCount);
 }
 
-int World::bodyCount() const { return static_cast<int>(impl_->bodies.size()); }
-BodyType World::bodyType(BodyId b) const { return impl_->bodies[static_cast<std::size_t>(b)].type; }
-float World::mass(BodyId b) const { return impl_->bodies[static_cast<std::size_t>(b)].mass; }
+int World::bodyCount() const {
+  return static_cast<int>(impl_->bodies.size());
+}
+BodyType World::bodyType(BodyId b) const {
+  return impl_->bodies[static_cast<std::size_t>(b)].type;
+}
+float World::mass(BodyId b) const {
+  return impl_->bodies[static_cast<std::size_t>(b)].mass;
+}
 const ConvexShape& World::bodyShape(BodyId b) const {
   return shapes_[static_cast<std::size_t>(impl_->bodies[static_cast<std::size_t>(b)].shape)];
 }
@@ -91,14 +98,19 @@ Pose World::pose(BodyId b) const {
   const Quat& q = state_.orientation[i];
   return {state_.position[i] - q * impl_->bodies[i].centroid, q};
 }
-Vec3 World::centerOfMass(BodyId b) const { return state_.position[static_cast<std::size_t>(b)]; }
-Vec3 World::linearVelocity(BodyId b) const { return state_.linearVelocity[static_cast<std::size_t>(b)]; }
+Vec3 World::centerOfMass(BodyId b) const {
+  return state_.position[static_cast<std::size_t>(b)];
+}
+Vec3 World::linearVelocity(BodyId b) const {
+  return state_.linearVelocity[static_cast<std::size_t>(b)];
+}
 Vec3 World::angularVelocity(BodyId b) const {
   return state_.angularVelocity[static_cast<std::size_t>(b)];
 }
 Vec3 World::pointVelocity(BodyId b, const Vec3& worldPoint) const {
   const auto i = static_cast<std::size_t>(b);
-  return state_.linearVelocity[i] + state_.angularVelocity[i].cross(worldPoint - state_.position[i]);
+  return state_.linearVelocity[i] +
+         state_.angularVelocity[i].cross(worldPoint - state_.position[i]);
 }
 
 void World::setPose(BodyId b, const Pose& p) {
@@ -136,7 +148,8 @@ void World::setVelocity(BodyId b, const Vec3& linear, const Vec3& angular) {
   grp.linearVelocity = linear - angular.cross(state_.position[i] - grp.position);
   for (std::size_t m = 0; m < state_.group.size(); ++m) {
     if (state_.group[m] != g) continue;
-    state_.linearVelocity[m] = grp.linearVelocity + angular.cross(state_.position[m] - grp.position);
+    state_.linearVelocity[m] =
+        grp.linearVelocity + angular.cross(state_.position[m] - grp.position);
     state_.angularVelocity[m] = angular;
   }
 }
@@ -176,7 +189,8 @@ JointId World::addJoint(const JointDef& def) {
   c.def = def;
   c.def.frameParent.normalize();
   c.def.frameChild.normalize();
-  c.comAnchorParent = def.anchorParent - impl_->bodies[static_cast<std::size_t>(def.parent)].centroid;
+  c.comAnchorParent =
+      def.anchorParent - impl_->bodies[static_cast<std::size_t>(def.parent)].centroid;
   c.comAnchorChild = def.anchorChild - impl_->bodies[static_cast<std::size_t>(def.child)].centroid;
   impl_->joints.push_back(c);
   state_.jointImpulse.resize(state_.jointImpulse.size() + kJointImpulses, 0.0f);
@@ -184,8 +198,12 @@ JointId World::addJoint(const JointDef& def) {
   return static_cast<JointId>(impl_->joints.size()) - 1;
 }
 
-int World::jointCount() const { return static_cast<int>(impl_->joints.size()); }
-const JointDef& World::joint(JointId j) const { return impl_->joints[static_cast<std::size_t>(j)].def; }
+int World::jointCount() const {
+  return static_cast<int>(impl_->joints.size());
+}
+const JointDef& World::joint(JointId j) const {
+  return impl_->joints[static_cast<std::size_t>(j)].def;
+}
 
 void World::setJointLimits(JointId j, bool enabled, const Vec3& lower, const Vec3& upper) {
   assert((lower.array() <= upper.array()).all() && "setJointLimits: lower > upper");
@@ -207,7 +225,8 @@ float World::jointSeparation(JointId j) const {
   return (pose(d.parent).transform(d.anchorParent) - pose(d.child).transform(d.anchorChild)).norm();
 }
 
-void World::setJointDrive(JointId j, const Quat& targetRelative, float maxTorque, float timeConstant) {
+void World::setJointDrive(JointId j, const Quat& targetRelative, float maxTorque,
+                          float timeConstant) {
   assert(maxTorque >= 0.0f && timeConstant >= 0.0f);
   JointConfig& c = impl_->joints[static_cast<std::size_t>(j)];
   c.driveEnabled = true;
@@ -216,7 +235,9 @@ void World::setJointDrive(JointId j, const Quat& targetRelative, float maxTorque
   c.driveTimeConstant = timeConstant;
 }
 
-void World::clearJointDrive(JointId j) { impl_->joints[static_cast<std::size_t>(j)].driveEnabled = false; }
+void World::clearJointDrive(JointId j) {
+  impl_->joints[static_cast<std::size_t>(j)].driveEnabled = false;
+}
 
 void World::setBodyDrive(BodyId b, const Pose& target, float maxForce, float maxTorque,
                          float timeConstant) {
@@ -229,7 +250,9 @@ void World::setBodyDrive(BodyId b, const Pose& target, float maxForce, float max
   c.driveTimeConstant = timeConstant;
 }
 
-void World::clearBodyDrive(BodyId b) { impl_->bodies[static_cast<std::size_t>(b)].driveEnabled = false; }
+void World::clearBodyDrive(BodyId b) {
+  impl_->bodies[static_cast<std::size_t>(b)].driveEnabled = false;
+}
 
 ConeId World::addAngularCone(BodyId a, const Vec3& axisA, BodyId b, const Vec3& axisB,
                              float maxAngle) {
@@ -241,7 +264,9 @@ ConeId World::addAngularCone(BodyId a, const Vec3& axisA, BodyId b, const Vec3& 
 void World::setConeEnabled(ConeId c, bool enabled) {
   impl_->cones[static_cast<std::size_t>(c)].enabled = enabled;
 }
-int World::coneCount() const { return static_cast<int>(impl_->cones.size()); }
+int World::coneCount() const {
+  return static_cast<int>(impl_->cones.size());
+}
 
 GroupId World::weld(std::span<const BodyId> members) {
   for (BodyId b : members) {
@@ -304,7 +329,8 @@ void World::unweld(GroupId gid) {
   for (std::size_t i = 0; i < state_.group.size(); ++i) {
     if (state_.group[i] != gid) continue;
     state_.group[i] = -1;
-    state_.linearVelocity[i] = g.linearVelocity + g.angularVelocity.cross(state_.position[i] - g.position);
+    state_.linearVelocity[i] =
+        g.linearVelocity + g.angularVelocity.cross(state_.position[i] - g.position);
     state_.angularVelocity[i] = g.angularVelocity;
   }
   g.alive = false;
@@ -314,7 +340,9 @@ void World::unweldAll() {
   for (std::size_t g = 0; g < state_.groups.size(); ++g) unweld(static_cast<GroupId>(g));
 }
 
-GroupId World::groupOf(BodyId b) const { return state_.group[static_cast<std::size_t>(b)]; }
+GroupId World::groupOf(BodyId b) const {
+  return state_.group[static_cast<std::size_t>(b)];
+}
 
 void World::reserveRows(int maxRows) {
   rows_.reserve(maxRows);
@@ -357,7 +385,9 @@ void World::restoreState(const WorldState& in) {
   state_ = in;
 }
 
-std::span<const ContactPoint> World::contacts() const { return impl_->contactView; }
+std::span<const ContactPoint> World::contacts() const {
+  return impl_->contactView;
+}
 
 float World::kineticEnergy() const {
   double e = 0.0;
@@ -373,7 +403,8 @@ float World::kineticEnergy() const {
     if (!g.alive) continue;
     const Mat3 r = g.orientation.toRotationMatrix();
     e += 0.5 * static_cast<double>(g.mass * g.linearVelocity.squaredNorm()) +
-         0.5 * static_cast<double>(g.angularVelocity.dot(r * g.inertiaLocal * r.transpose() * g.angularVelocity));
+         0.5 * static_cast<double>(
+                   g.angularVelocity.dot(r * g.inertiaLocal * r.transpose() * g.angularVelocity));
   }
   return static_cast<float>(e);
 }

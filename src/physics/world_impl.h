@@ -13,15 +13,16 @@ namespace dynahand::physics {
 // The velocity state the Gauss-Seidel sweeps read and write: one per solver slot (a free
 // body, a weld group, or the static dummy). Static/kinematic slots have zero inverse mass.
 struct SolverBody {
-  Vec3 v;           // linear velocity of the centre of mass, m/s
-  float invMass;    // 1/kg
-  Vec3 w;           // angular velocity, rad/s
+  Vec3 v;         // linear velocity of the centre of mass, m/s
+  float invMass;  // 1/kg
+  Vec3 w;         // angular velocity, rad/s
   float pad0;
   // Symmetric world inverse inertia (xx, yy, zz, xy, xz, yz), 1/(kg m^2).
   float ixx, iyy, izz, ixy, ixz, iyz;
   float pad1, pad2;
 };
-static_assert(sizeof(SolverBody) == 64, "SolverBody is the hot solver state: keep it one cache line");
+static_assert(sizeof(SolverBody) == 64,
+              "SolverBody is the hot solver state: keep it one cache line");
 
 inline Vec3 applyInvInertia(const SolverBody& b, const Vec3& x) {
   return {b.ixx * x.x() + b.ixy * x.y() + b.ixz * x.z(),
@@ -33,40 +34,40 @@ inline Vec3 applyInvInertia(const SolverBody& b, const Vec3& x) {
 // The accumulated impulse stays in [lower, upper]; friction rows take their bounds from
 // their normal row (± friction x normal impulse).
 struct Row {
-  Vec3 axis, angA, angB;        // Jacobian parts (axis is zero for angular rows)
-  Vec3 invIAngA, invIAngB;      // inverse inertia times the angular parts
+  Vec3 axis, angA, angB;    // Jacobian parts (axis is zero for angular rows)
+  Vec3 invIAngA, invIAngB;  // inverse inertia times the angular parts
   int slotA, slotB;
   float invMassA, invMassB;
-  float effMass;                // 1 / (J M^-1 J^T), kg (or kg m^2)
-  float bias;                   // velocity bias with position correction, m/s or rad/s
-  float relaxBias;              // velocity bias in the relax sweeps (speculative part only)
-  float massScale;              // soft rows (contacts): 1 / 0 for rigid rows
+  float effMass;    // 1 / (J M^-1 J^T), kg (or kg m^2)
+  float bias;       // velocity bias with position correction, m/s or rad/s
+  float relaxBias;  // velocity bias in the relax sweeps (speculative part only)
+  float massScale;  // soft rows (contacts): 1 / 0 for rigid rows
   float impulseScale;
-  float lower, upper;           // impulse bounds, N s
-  float impulse;                // accumulated impulse, N s
-  int frictionOf;               // index of the normal row, or -1
-  float friction;               // Coulomb coefficient when frictionOf >= 0
-  bool relax;                   // solved in the relax sweeps (motors are not)
-  int blockSize;                // rows [this, this + blockSize) are iterated blockPasses times
+  float lower, upper;  // impulse bounds, N s
+  float impulse;       // accumulated impulse, N s
+  int frictionOf;      // index of the normal row, or -1
+  float friction;      // Coulomb coefficient when frictionOf >= 0
+  bool relax;          // solved in the relax sweeps (motors are not)
+  int blockSize;       // rows [this, this + blockSize) are iterated blockPasses times
   int blockPasses;
-  float* store;                 // where the impulse is kept for warm starting, or nullptr
+  float* store;  // where the impulse is kept for warm starting, or nullptr
 };
 
 struct BodyConfig {
   int shape = -1;
   BodyType type = BodyType::Dynamic;
-  float mass = 1.0f;                  // kg
-  Mat3 inertiaLocal = Mat3::Zero();   // about the centre of mass, body axes, kg m^2
-  Vec3 centroid = Vec3::Zero();       // centre of mass in the body frame, m
-  float boundingRadius = 0.0f;        // about the centre of mass, m
-  float linearDamping = 0.0f;         // 1/s
-  float angularDamping = 0.0f;        // 1/s
+  float mass = 1.0f;                 // kg
+  Mat3 inertiaLocal = Mat3::Zero();  // about the centre of mass, body axes, kg m^2
+  Vec3 centroid = Vec3::Zero();      // centre of mass in the body frame, m
+  float boundingRadius = 0.0f;       // about the centre of mass, m
+  float linearDamping = 0.0f;        // 1/s
+  float angularDamping = 0.0f;       // 1/s
   // Body drive.
   bool driveEnabled = false;
-  Pose driveTarget;                   // world pose of the body frame
-  float driveMaxForce = 0.0f;         // N
-  float driveMaxTorque = 0.0f;        // N m
-  float driveTimeConstant = 0.0f;     // s
+  Pose driveTarget;                // world pose of the body frame
+  float driveMaxForce = 0.0f;      // N
+  float driveMaxTorque = 0.0f;     // N m
+  float driveTimeConstant = 0.0f;  // s
 };
 
 struct JointConfig {
@@ -116,22 +117,23 @@ struct World::Impl {
   };
   std::vector<JointPosition> jointPositions;
   // Ball-joint anchors solved as one 3x3 block per joint: Cdot = vB + wB x rB - vA - wA x rA,
-  // impulse increment = -K^-1 (Cdot + bias), K = (mA^-1 + mB^-1) 1 - [rA] IA^-1 [rA] - [rB] IB^-1 [rB].
+  // impulse increment = -K^-1 (Cdot + bias), K = (mA^-1 + mB^-1) 1 - [rA] IA^-1 [rA] - [rB] IB^-1
+  // [rB].
   struct PointBlock {
     int slotA, slotB;
-    Vec3 rA, rB;     // arms from the slots' centres of mass, world, m
-    Mat3 invK;       // kg
-    Vec3 bias;       // m/s
-    Vec3 impulse;    // accumulated, N s
-    float* store;    // 3 floats of WorldState::jointImpulse
+    Vec3 rA, rB;   // arms from the slots' centres of mass, world, m
+    Mat3 invK;     // kg
+    Vec3 bias;     // m/s
+    Vec3 impulse;  // accumulated, N s
+    float* store;  // 3 floats of WorldState::jointImpulse
   };
   std::vector<PointBlock> pointBlocks;
   std::vector<ContactPoint> contactView;
   std::vector<WorldState::CachedContact> newContacts;
   // Prepared surface rows (parallel to SurfaceRows).
   std::vector<int> surfSlot;
-  std::vector<Vec3> surfAng;        // r x n, m
-  std::vector<Vec3> surfInvIAng;    // I^-1 (r x n)
+  std::vector<Vec3> surfAng;      // r x n, m
+  std::vector<Vec3> surfInvIAng;  // I^-1 (r x n)
   std::vector<float> surfInvMass;
   std::vector<float> surfEffMass;
   std::vector<float> surfBias;

@@ -15,8 +15,8 @@ bool inFreeSpace(const Vec3& point, const DepthFrame& depth, const Intrinsics& i
   return raw == 0 || depth.metres(u, v) >= point.z();
 }
 
-void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const FreeSpaceTest& isFree,
-                  ErrorBreakdown& out) {
+void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
+                  const FreeSpaceTest& isFree, ErrorBreakdown& out) {
   const auto n = static_cast<std::size_t>(bodies.size());
   out.fit.assign(n, 0.0f);
   out.occlusion.assign(n, 0.0f);

@@ -29,8 +29,8 @@ struct ErrorBreakdown {
 // isFree(p): whether the camera saw the space at p (camera frame) to be empty, e.g.
 // CloudFrame::isFree or inFreeSpace below.
 using FreeSpaceTest = std::function<bool(const Vec3&)>;
-void computeError(const PosedBodies& bodies, std::span<const Vec3> points, const FreeSpaceTest& isFree,
-                  ErrorBreakdown& out);
+void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
+                  const FreeSpaceTest& isFree, ErrorBreakdown& out);
 
 // True when the pixel under `point` shows background farther than it or no data,
 // i.e. the point sits in space the camera saw to be empty. False outside the image.

@@ -27,7 +27,8 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
   if (count < 50) return result_;
   const Vec2 c(static_cast<float>(su / count), static_cast<float>(sv / count));
   Vec2 axis(0.0f, -1.0f);  // fingers up when there is no arm direction
-  if (cloud.segment.armDirectionImage.norm() > 0.5f) axis = -cloud.segment.armDirectionImage.normalized();
+  if (cloud.segment.armDirectionImage.norm() > 0.5f)
+    axis = -cloud.segment.armDirectionImage.normalized();
   const Vec2 across(-axis.y(), axis.x());
 
   float sMax = -1e9f, tMin = 1e9f, tMax = -1e9f;
@@ -98,11 +99,13 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
         const Run& r = runs_[static_cast<std::size_t>(i)];
         const float w = static_cast<float>(r.end - r.begin);
         fingerLike = fingerLike && w >= minWidth && w <= maxWidth;
-        for (int j = 0; j < i; ++j) fingerLike = fingerLike && runs_[static_cast<std::size_t>(j)].segment != r.segment;
+        for (int j = 0; j < i; ++j)
+          fingerLike = fingerLike && runs_[static_cast<std::size_t>(j)].segment != r.segment;
       }
       if (fingerLike) {
         fiveRow = row;
-        for (int i = 0; i < 5; ++i) fiveSegments[static_cast<std::size_t>(i)] = runs_[static_cast<std::size_t>(i)].segment;
+        for (int i = 0; i < 5; ++i)
+          fiveSegments[static_cast<std::size_t>(i)] = runs_[static_cast<std::size_t>(i)].segment;
       }
     }
     // Fire once the five fingers have come together into at most two runs (palm, and
@@ -110,14 +113,17 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
     if (fiveRow >= 0 && runs_.size() <= 2 && row > fiveRow) {
       bool longEnough = true;
       for (int segIndex : fiveSegments) {
-        longEnough = longEnough && segments_[static_cast<std::size_t>(segIndex)].length >= minLength;
+        longEnough =
+            longEnough && segments_[static_cast<std::size_t>(segIndex)].length >= minLength;
       }
       if (!longEnough) return result_;
       // Fingertips: the top of each segment, ordered across the hand.
       std::array<std::pair<float, int>, 5> order;
       for (int i = 0; i < 5; ++i) {
-        const Segment& seg = segments_[static_cast<std::size_t>(fiveSegments[static_cast<std::size_t>(i)])];
-        order[static_cast<std::size_t>(i)] = {seg.topColumn, fiveSegments[static_cast<std::size_t>(i)]};
+        const Segment& seg =
+            segments_[static_cast<std::size_t>(fiveSegments[static_cast<std::size_t>(i)])];
+        order[static_cast<std::size_t>(i)] = {seg.topColumn,
+                                              fiveSegments[static_cast<std::size_t>(i)]};
       }
       std::sort(order.begin(), order.end());
       // The thumb is the end finger whose tip is lower (nearer the wrist).
@@ -128,7 +134,8 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
       result_.thumbSideImage = thumbFirst ? Vec2(-across) : across;
       for (int i = 0; i < 5; ++i) {
         const int j = thumbFirst ? i : 4 - i;
-        const Segment& seg = segments_[static_cast<std::size_t>(order[static_cast<std::size_t>(j)].second)];
+        const Segment& seg =
+            segments_[static_cast<std::size_t>(order[static_cast<std::size_t>(j)].second)];
         // Step a little into the finger so the depth sample is on it, not its edge.
         const float sTip = sMax - static_cast<float>(seg.topRow) - 0.004f * pxPerM;
         const Vec2 p = c + axis * sTip + across * (tMin + seg.topColumn);
@@ -138,8 +145,10 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
         for (int r = 1; depth <= 0.0f && r <= 3; ++r) {  // nearest valid sample nearby
           for (int dv = -r; dv <= r && depth <= 0.0f; ++dv) {
             for (int du = -r; du <= r && depth <= 0.0f; ++du) {
-              const int uu = std::clamp(u + du, 0, width - 1), vv = std::clamp(v + dv, 0, k.height - 1);
-              if (cloud.mask[static_cast<std::size_t>(vv * width + uu)]) depth = cloud.depthAt(uu, vv);
+              const int uu = std::clamp(u + du, 0, width - 1),
+                        vv = std::clamp(v + dv, 0, k.height - 1);
+              if (cloud.mask[static_cast<std::size_t>(vv * width + uu)])
+                depth = cloud.depthAt(uu, vv);
             }
           }
         }

@@ -25,7 +25,7 @@ struct FingerDetection {
   // Fingertips ordered thumb, index, middle, ring, pinky (camera frame, m) when fired.
   std::array<Vec3, 5> tips{};
   std::array<Vec2, 5> tipPixels{};
-  Vec2 axisImage = Vec2(0, -1);  // unit, wrist -> fingertips in the image
+  Vec2 axisImage = Vec2(0, -1);      // unit, wrist -> fingertips in the image
   Vec2 thumbSideImage = Vec2(1, 0);  // unit, across the hand toward the thumb
 };
 

@@ -20,14 +20,17 @@ constexpr std::array<std::array<const char*, 3>, kFingerCount> kBodyEndKeypoint 
 
 }  // namespace
 
-Quat HandRig::modelToPhysics() { return model::modelToPhysicsFrame(); }
+Quat HandRig::modelToPhysics() {
+  return model::modelToPhysicsFrame();
+}
 
 Result<HandRig> HandRig::create(const model::ArticulatedModel& model,
                                 const physics::WorldSettings& worldSettings,
                                 const RigSettings& settings, float stepDt) {
   if (model.bodyCount() != 17 || model.jointCount() != 16 || !model.hasKeypoints21()) {
-    return Error{"the tracker needs a hand model: 17 bodies, 16 joints and the 21 hand keypoints (model '" +
-                 model.metadata().name + "' has " + std::to_string(model.bodyCount()) + " bodies)"};
+    return Error{
+        "the tracker needs a hand model: 17 bodies, 16 joints and the 21 hand keypoints (model '" +
+        model.metadata().name + "' has " + std::to_string(model.bodyCount()) + " bodies)"};
   }
   HandRig rig;
   rig.model_ = &model;
@@ -36,7 +39,8 @@ Result<HandRig> HandRig::create(const model::ArticulatedModel& model,
   const int n = model.bodyCount();
   HandAnatomy& a = rig.anatomy_;
   for (int f = 0; f < kFingerCount; ++f) {
-    for (int k = 0; k < 3; ++k) a.fingers[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)] = 2 + 3 * f + k;
+    for (int k = 0; k < 3; ++k)
+      a.fingers[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)] = 2 + 3 * f + k;
   }
   a.jointOfBody.assign(static_cast<std::size_t>(n), -1);
   for (int j = 0; j < model.jointCount(); ++j) {
@@ -51,21 +55,27 @@ Result<HandRig> HandRig::create(const model::ArticulatedModel& model,
   for (int f = 0; f < kFingerCount; ++f) {
     for (int k = 0; k < 3; ++k) {
       const int body = a.fingers[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)];
-      const int kp = model.keypointIndex(kBodyEndKeypoint[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)]);
+      const int kp = model.keypointIndex(
+          kBodyEndKeypoint[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)]);
       const int j = a.jointOfBody[static_cast<std::size_t>(body)];
-      if (kp < 0 || j < 0) return Error{"hand model lacks the keypoints of finger " + std::to_string(f)};
+      if (kp < 0 || j < 0)
+        return Error{"hand model lacks the keypoints of finger " + std::to_string(f)};
       const Pose& pose = rest.bodies[static_cast<std::size_t>(body)];
       const Vec3 from = model.joints()[static_cast<std::size_t>(j)].anchorChild;
       const Vec3 to = pose.inverseTransform(keypoints[static_cast<std::size_t>(kp)]);
-      if ((to - from).norm() < 1e-4f) return Error{"degenerate bone axis on body " + model.bodies()[static_cast<std::size_t>(body)].name};
+      if ((to - from).norm() < 1e-4f)
+        return Error{"degenerate bone axis on body " +
+                     model.bodies()[static_cast<std::size_t>(body)].name};
       a.boneAxis[static_cast<std::size_t>(body)] = (to - from).normalized();
     }
   }
 
   {
     const int wristJoint = a.jointOfBody[static_cast<std::size_t>(a.palm)];
-    const Vec3 wrist = model.joints()[static_cast<std::size_t>(wristJoint)].anchorParent;  // forearm frame
-    const Vec3 toElbow = model.bodies()[static_cast<std::size_t>(a.forearm)].shape.centroid() - wrist;
+    const Vec3 wrist =
+        model.joints()[static_cast<std::size_t>(wristJoint)].anchorParent;  // forearm frame
+    const Vec3 toElbow =
+        model.bodies()[static_cast<std::size_t>(a.forearm)].shape.centroid() - wrist;
     if (toElbow.norm() < 1e-4f) return Error{"the forearm's centroid is at the wrist"};
     a.forearmAxis = toElbow.normalized();
   }
@@ -76,8 +86,10 @@ Result<HandRig> HandRig::create(const model::ArticulatedModel& model,
   build.angularDamping = build.linearDamping;
   const model::ModelInWorld ids = model::addToWorld(world, model, rest, build);
   for (int b = 0; b < n; ++b) {
-    if (ids.bodies[static_cast<std::size_t>(b)] != b) return Error{"unexpected body order in the physics world"};
-    world.setMass(b, b == a.forearm ? settings.forearmMass : (b == a.palm ? settings.palmMass : settings.boneMass));
+    if (ids.bodies[static_cast<std::size_t>(b)] != b)
+      return Error{"unexpected body order in the physics world"};
+    world.setMass(b, b == a.forearm ? settings.forearmMass
+                                    : (b == a.palm ? settings.palmMass : settings.boneMass));
   }
   // Grasp bias: neighbouring fingers' middle and distal bones within a cone (index..pinky).
   const float cone = settings.graspConeDeg * std::numbers::pi_v<float> / 180.0f;
@@ -103,7 +115,8 @@ void HandRig::setPose(const model::ModelPose& pose) {
 
 void HandRig::readPose(model::ModelPose& out) const {
   out.bodies.resize(static_cast<std::size_t>(world_.bodyCount()));
-  for (int b = 0; b < world_.bodyCount(); ++b) out.bodies[static_cast<std::size_t>(b)] = world_.pose(b);
+  for (int b = 0; b < world_.bodyCount(); ++b)
+    out.bodies[static_cast<std::size_t>(b)] = world_.pose(b);
 }
 
 Quat HandRig::physicsJointRotation(int /*joint*/, const Vec3& modelAngles) const {

@@ -38,18 +38,19 @@ struct HandAnatomy {
 };
 
 struct RigSettings {
-  float boneMass = 1.0f;          // kg per finger bone (the original tracker used 1)
-  float palmMass = 4.0f;          // kg
-  float forearmMass = 6.0f;       // kg
-  float velocityRetention = 0.8f; // per physics step (the original's damping 0.8)
-  float graspConeDeg = 10.0f;     // neighbouring fingertip / middle bones, deg
+  float boneMass = 1.0f;           // kg per finger bone (the original tracker used 1)
+  float palmMass = 4.0f;           // kg
+  float forearmMass = 6.0f;        // kg
+  float velocityRetention = 0.8f;  // per physics step (the original's damping 0.8)
+  float graspConeDeg = 10.0f;      // neighbouring fingertip / middle bones, deg
 };
 
 class HandRig {
  public:
   // model must be a hand: 17 bodies in the documented order with the 21 keypoints.
-  static Result<HandRig> create(const model::ArticulatedModel& model, const physics::WorldSettings& world,
-                                const RigSettings& settings, float stepDt);
+  static Result<HandRig> create(const model::ArticulatedModel& model,
+                                const physics::WorldSettings& world, const RigSettings& settings,
+                                float stepDt);
 
   const model::ArticulatedModel& model() const { return *model_; }
   physics::World& world() { return world_; }

@@ -27,19 +27,24 @@ SimulationSettings simulationSettings(const TrackerSettings& s) {
 
 }  // namespace
 
-Result<std::unique_ptr<HandTracker>> HandTracker::create(const model::ArticulatedModel& model, model::Side side,
+Result<std::unique_ptr<HandTracker>> HandTracker::create(const model::ArticulatedModel& model,
+                                                         model::Side side,
                                                          const TrackerSettings& settings) {
   auto rig = HandRig::create(model, worldSettings(settings), RigSettings{}, settings.stepDt);
   if (!rig) return rig.error();
   return std::unique_ptr<HandTracker>(new HandTracker(model, side, settings, std::move(*rig)));
 }
 
-HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side, const TrackerSettings& settings,
-                         HandRig rig)
-    : model_(&model), side_(side), settings_(settings), rig_(std::move(rig)),
+HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
+                         const TrackerSettings& settings, HandRig rig)
+    : model_(&model),
+      side_(side),
+      settings_(settings),
+      rig_(std::move(rig)),
       simulator_(simulationSettings(settings)) {
   for (int k = 0; k < kStrategyCount; ++k) {
-    if (settings_.strategies[static_cast<std::size_t>(k)]) strategies_.push_back(makeStrategy(static_cast<StrategyKind>(k)));
+    if (settings_.strategies[static_cast<std::size_t>(k)])
+      strategies_.push_back(makeStrategy(static_cast<StrategyKind>(k)));
   }
   openAngles_ = model::zeroAngles(model);
   model::clampToLimits(model, openAngles_);
@@ -61,7 +66,9 @@ void HandTracker::reset() {
 float HandTracker::evaluate(const HandFrame& frame) {
   simulator_.pose(rig_, posed_);
   const CloudFrame* cloud = frame.cloud;
-  computeError(posed_, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); }, error_);
+  computeError(
+      posed_, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); },
+      error_);
   return error_.total;
 }
 
@@ -95,8 +102,14 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   StrategyKind bestKind = StrategyKind::Normal;
   for (auto& strategy : strategies_) {
     world.restoreState(start_);
-    StrategyContext context{rig_, simulator_, FrameInput{frame.points, frame.planes, {}, frame.cloud},
-                            settings_.substeps, frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};
+    StrategyContext context{rig_,
+                            simulator_,
+                            FrameInput{frame.points, frame.planes, {}, frame.cloud},
+                            settings_.substeps,
+                            frame.time,
+                            settings_.flipPeriodS,
+                            frame.detection,
+                            &startAngles_};
     Candidate candidate;
     candidate.kind = strategy->kind();
     candidate.ran = strategy->run(context);
@@ -124,7 +137,8 @@ model::ModelPose HandTracker::canonicalPose(const HandFrame& frame, const Vec2& 
   const auto k = model::keypoints21(*model_, rest);
   const Vec3 fingerModel = (k[9] - k[0]).normalized();
   Vec3 thumbModel = (k[5] - k[17]);
-  if (side_ == model::Side::Left) thumbModel = -thumbModel;  // mirrored: index->pinky points away from the thumb
+  if (side_ == model::Side::Left)
+    thumbModel = -thumbModel;  // mirrored: index->pinky points away from the thumb
   thumbModel = (thumbModel - thumbModel.dot(fingerModel) * fingerModel).normalized();
 
   // Mean of the points and its pixel; image directions lifted to the plane z = const.
@@ -181,7 +195,8 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
       labels.clear();
       for (int f = 0; f < kFingerCount; ++f) {
         const int tip = rig_.anatomy().fingers[static_cast<std::size_t>(f)][2];
-        labels.push_back({frame.detection->tips[static_cast<std::size_t>(f)], BodyMask{1} << tip, 20.0f});
+        labels.push_back(
+            {frame.detection->tips[static_cast<std::size_t>(f)], BodyMask{1} << tip, 20.0f});
       }
       input.labelled = labels;
       simulator_.run(rig_, input, steps / 2);
@@ -217,7 +232,8 @@ void HandTracker::fillResult(const HandFrame& frame, HandResult& out) {
   out.fitError = error_.fitTotal;
   out.occlusionError = error_.occlusionTotal;
   out.bodyError.resize(error_.fit.size());
-  for (std::size_t i = 0; i < error_.fit.size(); ++i) out.bodyError[i] = error_.fit[i] + error_.occlusion[i];
+  for (std::size_t i = 0; i < error_.fit.size(); ++i)
+    out.bodyError[i] = error_.fit[i] + error_.occlusion[i];
   out.keypoints21 = model::keypoints21(*model_, out.pose);
   if (model_->hasOpenXrJoints()) out.openxr26 = model::openxr26(*model_, out.pose);
 }

@@ -20,12 +20,13 @@ struct HandFrame {
   std::span<const BoundaryPlane> planes;
   const CloudFrame* cloud = nullptr;
   const FingerDetection* detection = nullptr;  // nullptr or not fired: none
-  double time = 0.0;  // sequence time, s
+  double time = 0.0;                           // sequence time, s
 };
 
 class HandTracker {
  public:
-  static Result<std::unique_ptr<HandTracker>> create(const model::ArticulatedModel& model, model::Side side,
+  static Result<std::unique_ptr<HandTracker>> create(const model::ArticulatedModel& model,
+                                                     model::Side side,
                                                      const TrackerSettings& settings);
   void initialize(const model::ModelPose& pose);
   void reset();
@@ -34,14 +35,15 @@ class HandTracker {
   void track(const HandFrame& frame, HandResult& out);
 
  private:
-  HandTracker(const model::ArticulatedModel& model, model::Side side, const TrackerSettings& settings,
-              HandRig rig);
+  HandTracker(const model::ArticulatedModel& model, model::Side side,
+              const TrackerSettings& settings, HandRig rig);
   float evaluate(const HandFrame& frame);
   void runStrategies(const HandFrame& frame, HandResult& out);
   void acquire(const HandFrame& frame, HandResult& out);
   // The open hand placed at the cloud: fingers along axisImage (wrist -> tips), thumb
   // toward thumbSideImage, palm centre at the cloud's centroid.
-  model::ModelPose canonicalPose(const HandFrame& frame, const Vec2& axisImage, const Vec2& thumbSideImage) const;
+  model::ModelPose canonicalPose(const HandFrame& frame, const Vec2& axisImage,
+                                 const Vec2& thumbSideImage) const;
   void fillResult(const HandFrame& frame, HandResult& out);
 
   const model::ArticulatedModel* model_;

@@ -8,7 +8,8 @@
 
 namespace dynahand::track {
 
-void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes, std::span<const Pose> poses) {
+void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
+                      std::span<const Pose> poses) {
   assert(shapes.size() == poses.size() && shapes.size() <= 32);
   shapes_.assign(shapes.begin(), shapes.end());
   poses_.assign(poses.begin(), poses.end());
@@ -139,7 +140,8 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
     const Vec3 local = pose.inverseTransform(p);
     int planeFace = 0;
     // Outside, the exact distance is at least the largest plane distance.
-    if (maxPlaneDistance(planes_[static_cast<std::size_t>(i)], local, &planeFace) > best.distance) continue;
+    if (maxPlaneDistance(planes_[static_cast<std::size_t>(i)], local, &planeFace) > best.distance)
+      continue;
     Vec3 closest;
     int face = -1;
     const float sd = shapes_[static_cast<std::size_t>(i)]->query(local, &closest, &face);

@@ -16,10 +16,10 @@ using BodyMask = std::uint32_t;  // bit i = body i may be matched (at most 32 bo
 inline constexpr BodyMask kAllBodies = ~BodyMask{0};
 
 struct SurfaceHit {
-  int body = -1;              // nearest body, -1 if none allowed
-  int face = -1;              // face of that body holding the closest point
-  float distance = 0.0f;      // unsigned distance to that body's surface, m
-  float signedDistance = 0.0f;  // negative when the point is inside the body, m
+  int body = -1;                   // nearest body, -1 if none allowed
+  int face = -1;                   // face of that body holding the closest point
+  float distance = 0.0f;           // unsigned distance to that body's surface, m
+  float signedDistance = 0.0f;     // negative when the point is inside the body, m
   Vec3 localPoint = Vec3::Zero();  // closest surface point, body frame, m
 };
 
@@ -31,7 +31,9 @@ class PosedBodies {
   void setPose(int body, const Pose& pose);
 
   int size() const { return static_cast<int>(shapes_.size()); }
-  const physics::ConvexShape& shape(int body) const { return *shapes_[static_cast<std::size_t>(body)]; }
+  const physics::ConvexShape& shape(int body) const {
+    return *shapes_[static_cast<std::size_t>(body)];
+  }
   const Pose& pose(int body) const { return poses_[static_cast<std::size_t>(body)]; }
   Vec3 worldCentroid(int body) const { return centroids_[static_cast<std::size_t>(body)]; }
 
@@ -64,8 +66,8 @@ class PosedBodies {
   std::vector<const physics::ConvexShape*> tableShapes_;  // shapes the tables were built for
   std::vector<PlaneTable> planes_;
   std::vector<Pose> poses_;
-  std::vector<Vec3> centroids_;    // world centroid of each body
-  std::vector<float> radii_;       // bounding radius about the centroid
+  std::vector<Vec3> centroids_;  // world centroid of each body
+  std::vector<float> radii_;     // bounding radius about the centroid
 };
 
 }  // namespace dynahand::track

@@ -37,7 +37,8 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
     if (hint) *hint = hit.body;
     if (hit.body < 0 || (!anyDistance && hit.distance > settings_.maxAttachDistance)) return;
     const Pose& pose = bodies_.pose(hit.body);
-    const Vec3& localNormal = bodies_.shape(hit.body).faces()[static_cast<std::size_t>(hit.face)].normal;
+    const Vec3& localNormal =
+        bodies_.shape(hit.body).faces()[static_cast<std::size_t>(hit.face)].normal;
     // The forearm's elbow-side end is where the arm was cut off, not a surface.
     if (hit.body == forearm && localNormal.dot(forearmAxis) > kCutEndCos) return;
     const Vec3 normal = pose.rotate(localNormal);
@@ -49,8 +50,10 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
       rows.addSurface(hit.body, hit.localPoint, normal, p, rowCap);
     }
   };
-  for (std::size_t i = 0; i < input.points.size(); ++i) attach(input.points[i], kAllBodies, cap, false, &hints_[i]);
-  for (const LabelledPoint& l : input.labelled) attach(l.point, l.bodies, cap * l.capScale, true, nullptr);
+  for (std::size_t i = 0; i < input.points.size(); ++i)
+    attach(input.points[i], kAllBodies, cap, false, &hints_[i]);
+  for (const LabelledPoint& l : input.labelled)
+    attach(l.point, l.bodies, cap * l.capScale, true, nullptr);
 
   const float boundaryCap = settings_.boundaryForce * settings_.stepDt;
   for (const BoundaryPlane& plane : input.planes) {

@@ -31,15 +31,15 @@ struct SimulationSettings {
 struct LabelledPoint {
   Vec3 point = Vec3::Zero();  // m, camera frame
   BodyMask bodies = kAllBodies;
-  float capScale = 1.0f;      // times the ordinary surface-row cap
+  float capScale = 1.0f;  // times the ordinary surface-row cap
 };
 
 // Everything one simulation needs for the current frame.
 struct FrameInput {
-  std::span<const Vec3> points;        // voxel cloud of this hand, m
+  std::span<const Vec3> points;  // voxel cloud of this hand, m
   std::span<const BoundaryPlane> planes;
   std::span<const LabelledPoint> labelled;
-  const CloudFrame* cloud = nullptr;   // for free-space queries
+  const CloudFrame* cloud = nullptr;  // for free-space queries
 };
 
 class Simulator {

@@ -12,11 +12,16 @@ namespace dynahand::track {
 
 const char* strategyName(StrategyKind kind) {
   switch (kind) {
-    case StrategyKind::Normal: return "normal";
-    case StrategyKind::GrossMotion: return "gross_motion";
-    case StrategyKind::GraspBias: return "grasp_bias";
-    case StrategyKind::FingerFlip: return "finger_flip";
-    case StrategyKind::FeatureDetection: return "feature_detection";
+    case StrategyKind::Normal:
+      return "normal";
+    case StrategyKind::GrossMotion:
+      return "gross_motion";
+    case StrategyKind::GraspBias:
+      return "grasp_bias";
+    case StrategyKind::FingerFlip:
+      return "finger_flip";
+    case StrategyKind::FeatureDetection:
+      return "feature_detection";
   }
   return "unknown";
 }
@@ -37,7 +42,10 @@ struct Tracker::Impl {
   int frameIndex = 0;
 
   Impl(const model::ArticulatedModel& rightHand, const Intrinsics& k, const TrackerSettings& s)
-      : settings(s), intrinsics(k), right(rightHand), left(model::mirrorModel(rightHand)),
+      : settings(s),
+        intrinsics(k),
+        right(rightHand),
+        left(model::mirrorModel(rightHand)),
         pipeline(k, s.cloud) {}
 };
 
@@ -45,12 +53,15 @@ Tracker::Tracker(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Tracker::~Tracker() = default;
 
 Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& rightHand,
-                                                 const Intrinsics& intrinsics, const TrackerSettings& settings) {
-  if (intrinsics.width <= 0 || intrinsics.height <= 0 || !(intrinsics.fx > 0) || !(intrinsics.fy > 0)) {
+                                                 const Intrinsics& intrinsics,
+                                                 const TrackerSettings& settings) {
+  if (intrinsics.width <= 0 || intrinsics.height <= 0 || !(intrinsics.fx > 0) ||
+      !(intrinsics.fy > 0)) {
     return Error{"invalid camera intrinsics"};
   }
   if (settings.hands != 1 && settings.hands != 2) return Error{"hands must be 1 or 2"};
-  if (settings.substeps < 1 || settings.iterations < 1) return Error{"substeps and iterations must be >= 1"};
+  if (settings.substeps < 1 || settings.iterations < 1)
+    return Error{"substeps and iterations must be >= 1"};
   auto impl = std::make_unique<Impl>(rightHand, intrinsics, settings);
   auto right = HandTracker::create(impl->right, model::Side::Right, settings);
   if (!right) return right.error();
@@ -83,11 +94,15 @@ void Tracker::reset() {
   impl_->splitter.reset();
 }
 
-const CloudFrame& Tracker::lastCloud() const { return impl_->cloud; }
+const CloudFrame& Tracker::lastCloud() const {
+  return impl_->cloud;
+}
 const model::ArticulatedModel& Tracker::model(model::Side side) const {
   return side == model::Side::Right ? impl_->right : impl_->left;
 }
-const TrackerSettings& Tracker::settings() const { return impl_->settings; }
+const TrackerSettings& Tracker::settings() const {
+  return impl_->settings;
+}
 
 const TrackResult& Tracker::track(const DepthFrame& frame) {
   const auto start = std::chrono::steady_clock::now();
@@ -100,7 +115,8 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
   const Status processed = m.pipeline.process(frame, m.cloud);
   const bool haveCloud = processed.ok() && m.cloud.segment.found;
   const FingerDetection* detection = nullptr;
-  if (haveCloud && m.settings.strategies[static_cast<std::size_t>(StrategyKind::FeatureDetection)]) {
+  if (haveCloud &&
+      m.settings.strategies[static_cast<std::size_t>(StrategyKind::FeatureDetection)]) {
     detection = &m.detector.detect(m.cloud);
   }
 
@@ -132,14 +148,16 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
         const Vec3 tips = (detection->tips[0] + detection->tips[4]) * 0.5f;
         const auto& mine = m.split[h == 0 ? Hand::kRight : Hand::kLeft];
         const auto& other = m.split[h == 0 ? Hand::kLeft : Hand::kRight];
-        if (mine.present && (!other.present || (tips - mine.centroid).norm() < (tips - other.centroid).norm())) {
+        if (mine.present &&
+            (!other.present || (tips - mine.centroid).norm() < (tips - other.centroid).norm())) {
           in.detection = detection;
         }
       }
     }
     m.hands[h]->track(in, r.hands[static_cast<std::size_t>(h)]);
   }
-  r.timeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  r.timeMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
 

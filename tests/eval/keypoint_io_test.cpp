@@ -35,12 +35,15 @@ TEST(KeypointIo, ReadsGroundTruthWithNullFrames) {
 }
 
 TEST(KeypointIo, ReadsTrackerOutputBySideAndTrackedFlag) {
-  const std::string line0 = "{\"frame\":0,\"hands\":[{\"side\":\"left\",\"tracked\":true,"
-                            "\"keypoints21\":" + keypointsJson(-0.1f) +
-                            "},{\"side\":\"right\",\"tracked\":true,\"keypoints21\":" +
-                            keypointsJson(0.1f) + "}]}\n";
-  const std::string line1 = "{\"frame\":1,\"hands\":[{\"side\":\"right\",\"tracked\":false,"
-                            "\"keypoints21\":" + keypointsJson(0.1f) + "}]}\n";
+  const std::string line0 =
+      "{\"frame\":0,\"hands\":[{\"side\":\"left\",\"tracked\":true,"
+      "\"keypoints21\":" +
+      keypointsJson(-0.1f) +
+      "},{\"side\":\"right\",\"tracked\":true,\"keypoints21\":" + keypointsJson(0.1f) + "}]}\n";
+  const std::string line1 =
+      "{\"frame\":1,\"hands\":[{\"side\":\"right\",\"tracked\":false,"
+      "\"keypoints21\":" +
+      keypointsJson(0.1f) + "}]}\n";
   const auto path = writeFile("pred.jsonl", line0 + line1);
   auto right = readKeypointsJsonl(path, "right");
   ASSERT_TRUE(right.ok()) << right.message();
@@ -53,9 +56,11 @@ TEST(KeypointIo, ReadsTrackerOutputBySideAndTrackedFlag) {
 }
 
 TEST(KeypointIo, ErrorsNameFileAndLine) {
-  auto bad = readKeypointsJsonl(writeFile("bad.jsonl", "{\"frame\":0,\"keypoints21\":null}\nnot json\n"));
+  auto bad =
+      readKeypointsJsonl(writeFile("bad.jsonl", "{\"frame\":0,\"keypoints21\":null}\nnot json\n"));
   ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.message().find("bad.jsonl:2: not a JSON object"), std::string::npos) << bad.message();
+  EXPECT_NE(bad.message().find("bad.jsonl:2: not a JSON object"), std::string::npos)
+      << bad.message();
   auto shortK = readKeypointsJsonl(writeFile("short.jsonl", "{\"keypoints21\":[[0,0,0]]}\n"));
   ASSERT_FALSE(shortK.ok());
   EXPECT_NE(shortK.message().find("21"), std::string::npos);

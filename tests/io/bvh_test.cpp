@@ -34,7 +34,8 @@ BvhFile parseBvh(const std::string& text) {
   std::istringstream in(text);
   auto expect = [&](const std::string& want) {
     std::string got;
-    if (!(in >> got) || got != want) throw std::runtime_error("expected '" + want + "', got '" + got + "'");
+    if (!(in >> got) || got != want)
+      throw std::runtime_error("expected '" + want + "', got '" + got + "'");
   };
   BvhFile f;
   expect("HIERARCHY");
@@ -44,8 +45,10 @@ BvhFile parseBvh(const std::string& text) {
   if (token != "ROOT") throw std::runtime_error("no ROOT");
   auto readJoint = [&](const std::string& kind, auto&& self) -> void {
     BvhJoint j;
-    if (kind != "End") in >> j.name;
-    else expect("Site");
+    if (kind != "End")
+      in >> j.name;
+    else
+      expect("Site");
     j.parent = stack.empty() ? -1 : stack.back();
     expect("{");
     expect("OFFSET");
@@ -69,9 +72,12 @@ BvhFile parseBvh(const std::string& text) {
     if (endSite) f.joints.back().name = "End";
     stack.push_back(index);
     while (in >> token && token != "}") {
-      if (token == "JOINT") self("JOINT", self);
-      else if (token == "End") self("End", self);
-      else throw std::runtime_error("unexpected '" + token + "'");
+      if (token == "JOINT")
+        self("JOINT", self);
+      else if (token == "End")
+        self("End", self);
+      else
+        throw std::runtime_error("unexpected '" + token + "'");
     }
     if (token != "}") throw std::runtime_error("unclosed joint");
     stack.pop_back();
@@ -98,7 +104,8 @@ BvhFile parseBvh(const std::string& text) {
 
 Mat3 axisRotation(const std::string& channel, float degrees) {
   const float r = degrees * std::numbers::pi_v<float> / 180.0f;
-  const Vec3 axis = channel[0] == 'X' ? Vec3::UnitX() : (channel[0] == 'Y' ? Vec3::UnitY() : Vec3::UnitZ());
+  const Vec3 axis =
+      channel[0] == 'X' ? Vec3::UnitX() : (channel[0] == 'Y' ? Vec3::UnitY() : Vec3::UnitZ());
   return Eigen::AngleAxisf(r, axis).toRotationMatrix();
 }
 
@@ -145,9 +152,12 @@ TEST(Bvh, ParsesStrictlyAndReproducesJointCentres) {
     model::JointAngles a = model::zeroAngles(hand);
     for (int j = 0; j < hand.jointCount(); ++j) {
       const auto& joint = hand.joints()[static_cast<std::size_t>(j)];
-      for (int k = 0; k < 3; ++k) a.angles[static_cast<std::size_t>(j)][k] = joint.minAngle[k] + u(rng) * (joint.maxAngle[k] - joint.minAngle[k]);
+      for (int k = 0; k < 3; ++k)
+        a.angles[static_cast<std::size_t>(j)][k] =
+            joint.minAngle[k] + u(rng) * (joint.maxAngle[k] - joint.minAngle[k]);
     }
-    a.root = {Vec3(0.05f * u(rng), -0.02f, 0.4f), Quat(Eigen::AngleAxisf(3.0f * u(rng), Vec3(u(rng), u(rng), 1).normalized()))};
+    a.root = {Vec3(0.05f * u(rng), -0.02f, 0.4f),
+              Quat(Eigen::AngleAxisf(3.0f * u(rng), Vec3(u(rng), u(rng), 1).normalized()))};
     poses.push_back(model::forwardKinematics(hand, a));
     writer.add(poses.back());
   }
@@ -167,8 +177,13 @@ TEST(Bvh, ParsesStrictlyAndReproducesJointCentres) {
       const int b = hand.bodyIndex(j.name);
       ASSERT_GE(b, 0) << j.name;
       const auto& body = hand.bodies()[static_cast<std::size_t>(b)];
-      const Vec3 local = body.joint < 0 ? Vec3::Zero() : hand.joints()[static_cast<std::size_t>(body.joint)].anchorChild;
-      const Vec3 expected = poses[static_cast<std::size_t>(frame)].bodies[static_cast<std::size_t>(b)].transform(local) * 100.0f;
+      const Vec3 local = body.joint < 0
+                             ? Vec3::Zero()
+                             : hand.joints()[static_cast<std::size_t>(body.joint)].anchorChild;
+      const Vec3 expected =
+          poses[static_cast<std::size_t>(frame)].bodies[static_cast<std::size_t>(b)].transform(
+              local) *
+          100.0f;
       EXPECT_LT((positions[k] - expected).norm(), 0.01f) << j.name << " frame " << frame;  // 0.1 mm
       ++k;
     }

@@ -85,7 +85,8 @@ TEST(TrackWriter, JsonLinesReadBackByEvalAndCsvHasAColumnPerCoordinate) {
   ASSERT_EQ(back->frames.size(), 4u);
   EXPECT_TRUE(back->frames[0].has_value());
   EXPECT_FALSE(back->frames[2].has_value());
-  EXPECT_NEAR((*back->frames[3])[0].x(), sampleResult(hand, 3, true).hands[0].keypoints21[0].x(), 1e-5f);
+  EXPECT_NEAR((*back->frames[3])[0].x(), sampleResult(hand, 3, true).hands[0].keypoints21[0].x(),
+              1e-5f);
 
   std::ifstream in(dir / "poses.csv");
   std::string header, line;

@@ -23,11 +23,21 @@ void* operator new(std::size_t size) {
   if (void* p = std::malloc(size ? size : 1)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
 #endif
 
 namespace dynahand::test {
@@ -36,8 +46,14 @@ AllocationCounter::AllocationCounter() {
   gAllocations = 0;
   gActive.fetch_add(1);
 }
-AllocationCounter::~AllocationCounter() { gActive.fetch_sub(1); }
-long AllocationCounter::count() const { return gAllocations.load(); }
-bool AllocationCounter::supported() { return DYNAHAND_COUNT_ALLOCATIONS != 0; }
+AllocationCounter::~AllocationCounter() {
+  gActive.fetch_sub(1);
+}
+long AllocationCounter::count() const {
+  return gAllocations.load();
+}
+bool AllocationCounter::supported() {
+  return DYNAHAND_COUNT_ALLOCATIONS != 0;
+}
 
 }  // namespace dynahand::test

@@ -49,9 +49,10 @@ Hinge makeJointScene(const Vec3& lower, const Vec3& upper) {
 // limit overshoots by at most 3 deg (linearised angles over one step).
 TEST(JointLimits, HoldWithinHalfDegreeWhileDrivePushesPast) {
   const Vec3 lower(-0.3f, -0.2f, -0.1f), upper(1.2f, 0.25f, 0.15f);
-  const std::vector<Vec3> targets = {Vec3(2.0f, 0, 0),  Vec3(-1.0f, 0, 0),   Vec3(0, 0.6f, 0),
-                                     Vec3(0, -0.6f, 0), Vec3(0, 0, 0.5f),    Vec3(0, 0, -0.5f),
-                                     Vec3(1.6f, 0.5f, 0), Vec3(1.6f, 0, 0.4f), Vec3(-1.0f, -0.5f, 0)};
+  const std::vector<Vec3> targets = {
+      Vec3(2.0f, 0, 0),    Vec3(-1.0f, 0, 0),   Vec3(0, 0.6f, 0),
+      Vec3(0, -0.6f, 0),   Vec3(0, 0, 0.5f),    Vec3(0, 0, -0.5f),
+      Vec3(1.6f, 0.5f, 0), Vec3(1.6f, 0, 0.4f), Vec3(-1.0f, -0.5f, 0)};
   for (const Vec3& target : targets) {
     Hinge h = makeJointScene(lower, upper);
     h.world.setJointDrive(h.joint, composeJointRotation(target), 5.0f, 0.1f);
@@ -234,7 +235,7 @@ TEST(BoundaryPlane, KeepsExtremePointOnAllowedSide) {
   BodyId b = 0;
   World w = freeBoxWorld(&b);
   w.setVelocity(b, Vec3(0, 0.5f, 0), Vec3(0, 0, 3.0f));  // heading into the plane, spinning
-  const Vec3 n(0, -1, 0);  // allowed side: y <= 0.05
+  const Vec3 n(0, -1, 0);                                // allowed side: y <= 0.05
   const float offset = -0.05f;
   float worst = 0.0f;
   for (int step = 0; step < 120; ++step) {
@@ -251,7 +252,8 @@ TEST(BoundaryPlane, KeepsExtremePointOnAllowedSide) {
 TEST(BodyDrive, ReachesTargetPoseWithinLimits) {
   BodyId b = 0;
   World w = freeBoxWorld(&b);
-  const Pose target{Vec3(0.05f, -0.02f, 0.01f), Quat(Eigen::AngleAxisf(0.5f, Vec3(0, 1, 1).normalized()))};
+  const Pose target{Vec3(0.05f, -0.02f, 0.01f),
+                    Quat(Eigen::AngleAxisf(0.5f, Vec3(0, 1, 1).normalized()))};
   w.setBodyDrive(b, target, 10.0f, 0.1f, 0.05f);
   for (int i = 0; i < 120; ++i) w.step(kDt);
   EXPECT_LT((w.pose(b).p - target.p).norm(), 1e-4f);

@@ -13,8 +13,8 @@ namespace {
 std::vector<Vec3> boxCorners(const Vec3& h, const Vec3& centre = Vec3::Zero()) {
   std::vector<Vec3> c;
   for (int i = 0; i < 8; ++i) {
-    c.push_back(centre + Vec3((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(),
-                              (i & 4) ? h.z() : -h.z()));
+    c.push_back(centre +
+                Vec3((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z()));
   }
   return c;
 }
@@ -50,10 +50,10 @@ TEST(ConvexShape, OffsetBoxMassPropertiesMatchClosedForm) {
   EXPECT_LT((shape->centroid() - centre).norm(), 1e-6f);
   const float m = 2.0f;
   const Vec3 s = 2.0f * h;
-  const Mat3 expected = Vec3(m / 12.0f * (s.y() * s.y() + s.z() * s.z()),
-                             m / 12.0f * (s.x() * s.x() + s.z() * s.z()),
-                             m / 12.0f * (s.x() * s.x() + s.y() * s.y()))
-                            .asDiagonal();
+  const Mat3 expected =
+      Vec3(m / 12.0f * (s.y() * s.y() + s.z() * s.z()), m / 12.0f * (s.x() * s.x() + s.z() * s.z()),
+           m / 12.0f * (s.x() * s.x() + s.y() * s.y()))
+          .asDiagonal();
   EXPECT_LT((shape->inertiaAboutCentroid(m) - expected).norm(), 1e-3f * expected.norm());
   EXPECT_NEAR(shape->inscribedRadius(), 0.01f, 1e-6f);  // half the smallest side
   EXPECT_NEAR(shape->boundingRadius(), h.norm(), 1e-6f);
@@ -67,10 +67,10 @@ TEST(ConvexShape, RotatedBoxInertiaRotatesWithIt) {
   auto shape = ConvexShape::fromPoints(pts);
   ASSERT_TRUE(shape.ok()) << shape.message();
   const Vec3 s = 2.0f * h;
-  const Mat3 local = Vec3((s.y() * s.y() + s.z() * s.z()) / 12.0f,
-                          (s.x() * s.x() + s.z() * s.z()) / 12.0f,
-                          (s.x() * s.x() + s.y() * s.y()) / 12.0f)
-                         .asDiagonal();
+  const Mat3 local =
+      Vec3((s.y() * s.y() + s.z() * s.z()) / 12.0f, (s.x() * s.x() + s.z() * s.z()) / 12.0f,
+           (s.x() * s.x() + s.y() * s.y()) / 12.0f)
+          .asDiagonal();
   const Mat3 expected = r * local * r.transpose();
   EXPECT_LT((shape->inertiaAboutCentroid(1.0f) - expected).norm(), 1e-4f);
   EXPECT_EQ(shape->faces().size(), 6u);
@@ -110,7 +110,8 @@ TEST(ConvexShape, FacesAreOutwardCcwSupportingPlanes) {
     Vec3 area = Vec3::Zero();
     const Vec3& a = shape->vertices()[f.vertices[0]];
     for (std::size_t i = 1; i + 1 < f.vertices.size(); ++i) {
-      area += (shape->vertices()[f.vertices[i]] - a).cross(shape->vertices()[f.vertices[i + 1]] - a);
+      area +=
+          (shape->vertices()[f.vertices[i]] - a).cross(shape->vertices()[f.vertices[i + 1]] - a);
     }
     EXPECT_GT(area.dot(f.normal), 0.0f);
   }
@@ -120,11 +121,11 @@ TEST(ConvexShape, SignedDistanceMatchesBoxClosedFormEverywhere) {
   const Vec3 h(0.3f, 0.2f, 0.1f);
   const ConvexShape shape = ConvexShape::box(h);
   // Inside, on faces, beyond edges and beyond vertices.
-  const std::vector<Vec3> probes = {
-      Vec3(0, 0, 0),          Vec3(0.1f, 0.05f, 0.02f), Vec3(0.5f, 0.0f, 0.0f),
-      Vec3(0.0f, -0.4f, 0.0f), Vec3(0.5f, 0.4f, 0.0f),   Vec3(-0.5f, 0.0f, -0.3f),
-      Vec3(0.4f, 0.3f, 0.2f), Vec3(-0.4f, -0.3f, -0.2f), Vec3(0.29f, 0.0f, 0.0f),
-      Vec3(0.3f, 0.2f, 0.1f)};
+  const std::vector<Vec3> probes = {Vec3(0, 0, 0),           Vec3(0.1f, 0.05f, 0.02f),
+                                    Vec3(0.5f, 0.0f, 0.0f),  Vec3(0.0f, -0.4f, 0.0f),
+                                    Vec3(0.5f, 0.4f, 0.0f),  Vec3(-0.5f, 0.0f, -0.3f),
+                                    Vec3(0.4f, 0.3f, 0.2f),  Vec3(-0.4f, -0.3f, -0.2f),
+                                    Vec3(0.29f, 0.0f, 0.0f), Vec3(0.3f, 0.2f, 0.1f)};
   for (const Vec3& p : probes) {
     const float expected = boxSignedDistance(p, h);
     EXPECT_NEAR(shape.signedDistance(p), expected, 1e-6f) << p.transpose();
@@ -195,7 +196,7 @@ TEST(ConvexShape, RaycastHitsMissesAndStartsInside) {
   ASSERT_TRUE(slanted.has_value());
   EXPECT_NEAR(*slanted, 0.9f, 1e-6f);
   EXPECT_FALSE(shape.raycast(Vec3(0, 0.2f, -1), Vec3(0, 0, 1), 10.0f).has_value());
-  EXPECT_FALSE(shape.raycast(Vec3(0, 0, -1), Vec3(0, 0, 1), 0.5f).has_value());  // too short
+  EXPECT_FALSE(shape.raycast(Vec3(0, 0, -1), Vec3(0, 0, 1), 0.5f).has_value());    // too short
   EXPECT_FALSE(shape.raycast(Vec3(0, 0, -1), Vec3(0, 0, -1), 10.0f).has_value());  // away
   auto inside = shape.raycast(Vec3(0, 0, 0), Vec3(1, 0, 0), 10.0f);
   ASSERT_TRUE(inside.has_value());

@@ -50,7 +50,8 @@ TEST(Dynamics, PendulumPeriodWithinOnePercent) {
   anchorDef.type = BodyType::Static;
   const BodyId anchor = w.addBody(anchorDef);
   const float length = 0.3f, amplitude = 0.05f;
-  BodyDef bobDef = boxBody(small, Vec3(length * std::sin(amplitude), -length * std::cos(amplitude), 0.0f));
+  BodyDef bobDef =
+      boxBody(small, Vec3(length * std::sin(amplitude), -length * std::cos(amplitude), 0.0f));
   const BodyId bob = w.addBody(bobDef);
   JointDef j;
   j.parent = anchor;
@@ -59,19 +60,21 @@ TEST(Dynamics, PendulumPeriodWithinOnePercent) {
   w.addJoint(j);
   const float side = 0.04f;
   const float inertiaCm = side * side / 6.0f;  // m (s^2 + s^2) / 12 with m = 1
-  const float expected = 2.0f * static_cast<float>(M_PI) *
-                         std::sqrt((inertiaCm + length * length) / (9.81f * length));
+  const float expected =
+      2.0f * static_cast<float>(M_PI) * std::sqrt((inertiaCm + length * length) / (9.81f * length));
   // Period from upward zero crossings of x over ~8 periods (linear interpolation).
   std::vector<float> crossings;
   float prevX = w.centerOfMass(bob).x();
   for (int i = 1; i <= static_cast<int>(9.0f * expected / kDt); ++i) {
     w.step(kDt);
     const float x = w.centerOfMass(bob).x();
-    if (prevX < 0.0f && x >= 0.0f) crossings.push_back((static_cast<float>(i) - x / (x - prevX)) * kDt);
+    if (prevX < 0.0f && x >= 0.0f)
+      crossings.push_back((static_cast<float>(i) - x / (x - prevX)) * kDt);
     prevX = x;
   }
   ASSERT_GE(crossings.size(), 6u);
-  const float period = (crossings.back() - crossings.front()) / static_cast<float>(crossings.size() - 1);
+  const float period =
+      (crossings.back() - crossings.front()) / static_cast<float>(crossings.size() - 1);
   EXPECT_NEAR(period, expected, 0.01f * expected) << "expected " << expected;
 }
 
@@ -88,7 +91,8 @@ TEST(Dynamics, SeventeenBodyChainAnchorsDriftUnderTenthMillimetre) {
   BodyId prev = root;
   std::vector<JointId> joints;
   for (int i = 1; i <= 17; ++i) {
-    const BodyId b = w.addBody(boxBody(link, Vec3(2.0f * half * static_cast<float>(i), 0.0f, 0.0f)));
+    const BodyId b =
+        w.addBody(boxBody(link, Vec3(2.0f * half * static_cast<float>(i), 0.0f, 0.0f)));
     JointDef j;
     j.parent = prev;
     j.child = b;
@@ -102,7 +106,8 @@ TEST(Dynamics, SeventeenBodyChainAnchorsDriftUnderTenthMillimetre) {
   Vec3 tipPrev = w.centerOfMass(prev);
   for (int i = 0; i < 2400; ++i) {
     const float t = static_cast<float>(i) * dt;
-    w.setVelocity(root, Vec3(0, 0.05f * twoPi * std::cos(twoPi * t), 0), Vec3(0, 0, 2.0f * std::cos(3.0f * t)));
+    w.setVelocity(root, Vec3(0, 0.05f * twoPi * std::cos(twoPi * t), 0),
+                  Vec3(0, 0, 2.0f * std::cos(3.0f * t)));
     w.step(dt);
     for (JointId j : joints) worst = std::max(worst, w.jointSeparation(j));
     tipTravel += (w.centerOfMass(prev) - tipPrev).norm();
@@ -118,8 +123,10 @@ TEST(Dynamics, UndampedUnconstrainedEnergyDoesNotGrow) {
   const int cube = w.addShape(ConvexShape::box(Vec3(0.03f, 0.03f, 0.03f)));
   scenes::Rng rng(3);
   for (int i = 0; i < 6; ++i) {
-    BodyDef d = boxBody(i % 2 ? plank : cube, Vec3(0.15f * static_cast<float>(i % 3), 0.15f * static_cast<float>(i / 3), 0.0f));
-    d.linearVelocity = Vec3(rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f));
+    BodyDef d = boxBody(i % 2 ? plank : cube, Vec3(0.15f * static_cast<float>(i % 3),
+                                                   0.15f * static_cast<float>(i / 3), 0.0f));
+    d.linearVelocity =
+        Vec3(rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f));
     d.angularVelocity = Vec3(rng.uniform(-8, 8), rng.uniform(-8, 8), rng.uniform(-8, 8));
     w.addBody(d);
   }
@@ -194,14 +201,18 @@ TEST(Dynamics, DampingFromRetentionScalesVelocityPerStep) {
 }
 
 TEST(JointAngles, ComposeDecomposeRoundTrip) {
-  for (const Vec3& a : {Vec3(0.3f, 0.1f, -0.2f), Vec3(-1.2f, 0.4f, 0.5f), Vec3(1.5f, -0.3f, 0.0f), Vec3::Zero().eval()}) {
+  for (const Vec3& a : {Vec3(0.3f, 0.1f, -0.2f), Vec3(-1.2f, 0.4f, 0.5f), Vec3(1.5f, -0.3f, 0.0f),
+                        Vec3::Zero().eval()}) {
     const Vec3 back = decomposeJointRotation(composeJointRotation(a));
     EXPECT_LT((back - a).norm(), 1e-5f) << a.transpose() << " -> " << back.transpose();
   }
   // Pure rotations about the joint axes give pure angles.
-  EXPECT_NEAR(decomposeJointRotation(Quat(Eigen::AngleAxisf(0.7f, Vec3::UnitZ()))).x(), 0.7f, 1e-6f);
-  EXPECT_NEAR(decomposeJointRotation(Quat(Eigen::AngleAxisf(0.3f, Vec3::UnitY()))).y(), 0.3f, 1e-6f);
-  EXPECT_NEAR(decomposeJointRotation(Quat(Eigen::AngleAxisf(0.2f, Vec3::UnitX()))).z(), 0.2f, 1e-6f);
+  EXPECT_NEAR(decomposeJointRotation(Quat(Eigen::AngleAxisf(0.7f, Vec3::UnitZ()))).x(), 0.7f,
+              1e-6f);
+  EXPECT_NEAR(decomposeJointRotation(Quat(Eigen::AngleAxisf(0.3f, Vec3::UnitY()))).y(), 0.3f,
+              1e-6f);
+  EXPECT_NEAR(decomposeJointRotation(Quat(Eigen::AngleAxisf(0.2f, Vec3::UnitX()))).z(), 0.2f,
+              1e-6f);
 }
 
 }  // namespace

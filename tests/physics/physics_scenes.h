@@ -48,8 +48,8 @@ inline ConvexShape bonePrism(float length, float hy, float hz) {
 
 struct HandLike {
   World world;
-  std::vector<BodyId> bodies;  // 0 wrist (forearm end), 1 palm, then 5 digits x 3 bones
-  std::vector<JointId> joints; // 16
+  std::vector<BodyId> bodies;   // 0 wrist (forearm end), 1 palm, then 5 digits x 3 bones
+  std::vector<JointId> joints;  // 16
 };
 
 // 17 bodies, 16 ball joints with flexion/abduction/twist limits, contacts between every pair
@@ -95,8 +95,9 @@ inline HandLike makeHandLike(const WorldSettings& settings = {}) {
   const std::array<float, 3> bone = {0.045f, 0.028f, 0.022f};
   for (int f = 0; f < 5; ++f) {
     const bool thumb = f == 4;
-    Pose base = thumb ? Pose{Vec3(0.015f, -0.042f, 0.0f), Quat(Eigen::AngleAxisf(-0.9f, Vec3::UnitZ()))}
-                      : Pose{Vec3(0.09f, fingerY[static_cast<std::size_t>(f)], 0.0f), Quat::Identity()};
+    Pose base =
+        thumb ? Pose{Vec3(0.015f, -0.042f, 0.0f), Quat(Eigen::AngleAxisf(-0.9f, Vec3::UnitZ()))}
+              : Pose{Vec3(0.09f, fingerY[static_cast<std::size_t>(f)], 0.0f), Quat::Identity()};
     const float scale = thumb ? 1.0f : fingerScale[static_cast<std::size_t>(f)];
     BodyId parent = palm;
     Vec3 anchor = w.pose(palm).inverseTransform(handPose.transform(base.p));
@@ -122,7 +123,9 @@ inline void addRandomSurfaceRows(World& w, int count, std::uint64_t seed, float 
   for (int i = 0; i < count; ++i) {
     const BodyId b = rng.index(w.bodyCount());
     const ConvexShape& s = w.bodyShape(b);
-    const Vec3 probe = s.centroid() + Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * s.boundingRadius();
+    const Vec3 probe =
+        s.centroid() +
+        Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * s.boundingRadius();
     Vec3 anchor;
     int face = 0;
     s.query(probe, &anchor, &face);

@@ -56,15 +56,18 @@ TEST(Contacts, DrivenFingersDoNotInterpenetrate) {
   const BodyId ia = w.addBody(a), ib = w.addBody(b);
   // Each is driven to a pose 1 cm into the other, with a strong force.
   w.setBodyDrive(ia, Pose{Vec3(0, 0.005f, 0), Quat::Identity()}, 20.0f, 1.0f);
-  w.setBodyDrive(ib, Pose{Vec3(0, -0.005f, 0), Quat(Eigen::AngleAxisf(0.2f, Vec3::UnitX()))}, 20.0f, 1.0f);
+  w.setBodyDrive(ib, Pose{Vec3(0, -0.005f, 0), Quat(Eigen::AngleAxisf(0.2f, Vec3::UnitX()))}, 20.0f,
+                 1.0f);
   float deepest = 0.0f;
   const ConvexShape& s = w.bodyShape(ia);
   for (int i = 0; i < 240; ++i) {
     w.step(kDt);
     // Penetration: deepest vertex of either body inside the other (exact signed distance).
     for (const Vec3& v : s.vertices()) {
-      deepest = std::max(deepest, -s.signedDistance(w.pose(ia).inverseTransform(w.pose(ib).transform(v))));
-      deepest = std::max(deepest, -s.signedDistance(w.pose(ib).inverseTransform(w.pose(ia).transform(v))));
+      deepest = std::max(deepest,
+                         -s.signedDistance(w.pose(ia).inverseTransform(w.pose(ib).transform(v))));
+      deepest = std::max(deepest,
+                         -s.signedDistance(w.pose(ib).inverseTransform(w.pose(ia).transform(v))));
     }
   }
   EXPECT_LT(deepest, 1e-3f);
@@ -103,7 +106,8 @@ TEST(Weld, KeepsRelativePosesWhileTheGroupMovesAndUnweldFrees) {
   const BodyId tip = all[4];
   for (int i = 0; i < 60; ++i) {
     w.rows().clear();
-    w.rows().addSurface(tip, Vec3(0.02f, 0, 0), Vec3::UnitY(), w.pose(tip).transform(Vec3(0.02f, 0, 0)) + Vec3(0, 0.05f, 0), 1.0f);
+    w.rows().addSurface(tip, Vec3(0.02f, 0, 0), Vec3::UnitY(),
+                        w.pose(tip).transform(Vec3(0.02f, 0, 0)) + Vec3(0, 0.05f, 0), 1.0f);
     w.step(kDt);
   }
   EXPECT_GT((w.pose(all[1]).p - palmStart).norm(), 5e-3f);  // the whole hand moved
@@ -122,7 +126,8 @@ TEST(Weld, KeepsRelativePosesWhileTheGroupMovesAndUnweldFrees) {
   const Pose palmToTip0 = w.pose(all[1]).inverse() * w.pose(tip);
   for (int i = 0; i < 30; ++i) {
     w.rows().clear();
-    w.rows().addSurface(tip, Vec3(0.02f, 0, 0), Vec3::UnitZ(), w.pose(tip).transform(Vec3(0.02f, 0, 0)) + Vec3(0, 0, 0.03f), 1.0f);
+    w.rows().addSurface(tip, Vec3(0.02f, 0, 0), Vec3::UnitZ(),
+                        w.pose(tip).transform(Vec3(0.02f, 0, 0)) + Vec3(0, 0, 0.03f), 1.0f);
     w.step(kDt);
   }
   const Pose palmToTip1 = w.pose(all[1]).inverse() * w.pose(tip);
@@ -187,7 +192,8 @@ TEST(Determinism, TwoRunsGiveIdenticalBytes) {
 }
 
 TEST(Allocation, NoHeapAllocationPerStepAfterWarmUp) {
-  if (!test::AllocationCounter::supported()) GTEST_SKIP() << "allocation counting is off under ASan";
+  if (!test::AllocationCounter::supported())
+    GTEST_SKIP() << "allocation counting is off under ASan";
   scenes::HandLike h = scenes::makeHandLike();
   World& w = h.world;
   w.reserveRows(1000);

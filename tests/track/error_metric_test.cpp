@@ -26,7 +26,8 @@ Vec3 closestOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& 
   const float vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
   const float va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
   const float denom = 1.0f / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
@@ -59,16 +60,19 @@ Scene randomScene(unsigned seed) {
   Scene s;
   for (int b = 0; b < 6; ++b) {
     std::vector<Vec3> pts;
-    const Vec3 half(0.01f + 0.01f * std::abs(u(rng)), 0.008f + 0.01f * std::abs(u(rng)), 0.02f + 0.02f * std::abs(u(rng)));
+    const Vec3 half(0.01f + 0.01f * std::abs(u(rng)), 0.008f + 0.01f * std::abs(u(rng)),
+                    0.02f + 0.02f * std::abs(u(rng)));
     for (int k = 0; k < 30; ++k) pts.push_back(Vec3(u(rng), u(rng), u(rng)).cwiseProduct(half));
     auto shape = physics::ConvexShape::fromPoints(pts);
     EXPECT_TRUE(shape.ok());
     s.shapes.push_back(*shape);
-    s.poses.push_back({Vec3(0.05f * u(rng), 0.04f * u(rng), 0.5f + 0.05f * u(rng)),
-                       Quat(Eigen::AngleAxisf(3.0f * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()))});
+    s.poses.push_back(
+        {Vec3(0.05f * u(rng), 0.04f * u(rng), 0.5f + 0.05f * u(rng)),
+         Quat(Eigen::AngleAxisf(3.0f * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()))});
   }
   for (auto& shape : s.shapes) s.shapePtrs.push_back(&shape);
-  for (int k = 0; k < 300; ++k) s.points.push_back(Vec3(0.08f * u(rng), 0.06f * u(rng), 0.5f + 0.08f * u(rng)));
+  for (int k = 0; k < 300; ++k)
+    s.points.push_back(Vec3(0.08f * u(rng), 0.06f * u(rng), 0.5f + 0.08f * u(rng)));
   // A depth image: a wall at 0.52 m with a hole of no data and a near patch at 0.40 m.
   for (int v = 0; v < 48; ++v) {
     for (int x = 0; x < 64; ++x) {
@@ -84,7 +88,9 @@ TEST(ErrorMetric, MatchesBruteForceOnRandomPoses) {
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
     ErrorBreakdown err;
-    computeError(bodies, s.points, [&](const Vec3& c) { return inFreeSpace(c, s.depth, s.intrinsics); }, err);
+    computeError(
+        bodies, s.points, [&](const Vec3& c) { return inFreeSpace(c, s.depth, s.intrinsics); },
+        err);
 
     std::vector<float> fit(s.shapes.size(), 0.0f);
     for (const Vec3& p : s.points) {
@@ -94,14 +100,16 @@ TEST(ErrorMetric, MatchesBruteForceOnRandomPoses) {
         const float d = bruteSurfaceDistance(s.shapes[i], s.poses[i], p);
         if (d < best) best = d, bestBody = static_cast<int>(i);
       }
-      fit[static_cast<std::size_t>(bestBody)] = std::max(fit[static_cast<std::size_t>(bestBody)], best);
+      fit[static_cast<std::size_t>(bestBody)] =
+          std::max(fit[static_cast<std::size_t>(bestBody)], best);
     }
     float total = 0;
     for (std::size_t i = 0; i < s.shapes.size(); ++i) {
       EXPECT_NEAR(err.fit[i], fit[i], 1e-5f) << "seed " << seed << " body " << i;
       const Vec3 c = s.poses[i].transform(s.shapes[i].centroid());
       const Vec2 uv = s.intrinsics.project(c);
-      const int x = static_cast<int>(std::lround(uv.x())), y = static_cast<int>(std::lround(uv.y()));
+      const int x = static_cast<int>(std::lround(uv.x())),
+                y = static_cast<int>(std::lround(uv.y()));
       float occ = 0;
       if (x >= 0 && y >= 0 && x < 64 && y < 48) {
         const float d = s.depth.metres(x, y);
@@ -127,17 +135,32 @@ TEST(ErrorMetric, PerfectFitHasNoFitError) {
   DepthFrame depth(64, 48, 0.001f);
   for (auto& d : depth.depth) d = 480;  // the box's front face occludes its centroid
   ErrorBreakdown err;
-  computeError(bodies, pts, [&](const Vec3& c) { return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}); }, err);
+  computeError(
+      bodies, pts,
+      [&](const Vec3& c) {
+        return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f});
+      },
+      err);
   EXPECT_NEAR(err.total, 0.0f, 1e-6f);
   EXPECT_EQ(err.pointCount[0], 81);
   // Move the box 1 cm back: every point is 1 cm off and the centroid still occluded.
   bodies.setPose(0, {Vec3(0, 0, 0.51f), Quat::Identity()});
-  computeError(bodies, pts, [&](const Vec3& c) { return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}); }, err);
+  computeError(
+      bodies, pts,
+      [&](const Vec3& c) {
+        return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f});
+      },
+      err);
   EXPECT_NEAR(err.fit[0], 0.01f, 1e-5f);
   EXPECT_FLOAT_EQ(err.occlusion[0], 0.0f);
   // Nothing seen at the centroid's pixel (no data): penalty = inscribed radius (2 cm).
   for (auto& d : depth.depth) d = 0;
-  computeError(bodies, pts, [&](const Vec3& c) { return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f}); }, err);
+  computeError(
+      bodies, pts,
+      [&](const Vec3& c) {
+        return inFreeSpace(c, depth, Intrinsics{64, 48, 60, 60, 31.5f, 23.5f});
+      },
+      err);
   EXPECT_NEAR(err.occlusion[0], 0.02f, 1e-6f);
 }
 
@@ -145,7 +168,8 @@ TEST(PosedBodies, MaskRestrictsMatching) {
   std::vector<physics::ConvexShape> shapes{physics::ConvexShape::box(Vec3(0.01f, 0.01f, 0.01f)),
                                            physics::ConvexShape::box(Vec3(0.01f, 0.01f, 0.01f))};
   std::vector<const physics::ConvexShape*> ptrs{&shapes[0], &shapes[1]};
-  std::vector<Pose> poses{{Vec3(0, 0, 0.5f), Quat::Identity()}, {Vec3(0.1f, 0, 0.5f), Quat::Identity()}};
+  std::vector<Pose> poses{{Vec3(0, 0, 0.5f), Quat::Identity()},
+                          {Vec3(0.1f, 0, 0.5f), Quat::Identity()}};
   PosedBodies bodies;
   bodies.set(ptrs, poses);
   const Vec3 p(0.0f, 0.0f, 0.48f);
@@ -185,7 +209,8 @@ TEST(PosedBodies, PlanarQueryIsExactInsideAndALowerBoundOutside) {
   }
   // The planar answer does not depend on the hint.
   for (const Vec3& p : s.points) {
-    EXPECT_EQ(bodies.nearestPlanar(p, kAllBodies, -1).body, bodies.nearestPlanar(p, kAllBodies, 2).body);
+    EXPECT_EQ(bodies.nearestPlanar(p, kAllBodies, -1).body,
+              bodies.nearestPlanar(p, kAllBodies, 2).body);
   }
   EXPECT_GT(inside, 0);
 }

@@ -23,7 +23,8 @@ TEST(HandRig, ValidPosesAreAtRest) {
     for (int j = 0; j < hand.jointCount(); ++j) {
       const auto& joint = hand.joints()[static_cast<std::size_t>(j)];
       for (int k = 0; k < 3; ++k) {
-        a.angles[static_cast<std::size_t>(j)][k] = joint.minAngle[k] + u(rng) * (joint.maxAngle[k] - joint.minAngle[k]);
+        a.angles[static_cast<std::size_t>(j)][k] =
+            joint.minAngle[k] + u(rng) * (joint.maxAngle[k] - joint.minAngle[k]);
       }
     }
     a.root.p = Vec3(0, 0, 0.4f);
@@ -38,7 +39,9 @@ TEST(HandRig, ValidPosesAreAtRest) {
     const auto k0 = model::keypoints21(hand, pose);
     const auto k1 = model::keypoints21(hand, after);
     float worst = 0;
-    for (int i = 0; i < 21; ++i) worst = std::max(worst, (k0[static_cast<std::size_t>(i)] - k1[static_cast<std::size_t>(i)]).norm());
+    for (int i = 0; i < 21; ++i)
+      worst = std::max(worst,
+                       (k0[static_cast<std::size_t>(i)] - k1[static_cast<std::size_t>(i)]).norm());
     EXPECT_LT(worst, 0.002f) << "trial " << trial;
   }
 }

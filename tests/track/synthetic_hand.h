@@ -36,7 +36,9 @@ inline Pose facingCamera(const model::ArticulatedModel& m, const Vec3& centre) {
 class SyntheticCamera {
  public:
   SyntheticCamera(const std::string& profile, std::uint64_t seed = 7)
-      : profile_(*synth::findSensorProfile(profile)), renderer_(profile_.intrinsics), sensor_(profile_, seed) {}
+      : profile_(*synth::findSensorProfile(profile)),
+        renderer_(profile_.intrinsics),
+        sensor_(profile_, seed) {}
 
   const Intrinsics& intrinsics() const { return profile_.intrinsics; }
 

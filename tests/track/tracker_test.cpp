@@ -40,7 +40,8 @@ ClipRun runClip(const std::string& clip, int frames, float speed = 1.0f,
     double err = 0;
     for (int k = 0; k < 21; ++k) {
       err += static_cast<double>((h.keypoints21[static_cast<std::size_t>(k)] -
-                                  frame.hands[0].keypoints[static_cast<std::size_t>(k)]).norm());
+                                  frame.hands[0].keypoints[static_cast<std::size_t>(k)])
+                                     .norm());
     }
     total += err / 21.0;
   }

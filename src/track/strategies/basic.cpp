@@ -61,11 +61,16 @@ std::unique_ptr<Strategy> makeFeatureDetectionStrategy();
 
 std::unique_ptr<Strategy> makeStrategy(StrategyKind kind) {
   switch (kind) {
-    case StrategyKind::Normal: return std::make_unique<NormalStrategy>();
-    case StrategyKind::GrossMotion: return std::make_unique<GrossMotionStrategy>();
-    case StrategyKind::GraspBias: return std::make_unique<GraspBiasStrategy>();
-    case StrategyKind::FingerFlip: return makeFingerFlipStrategy();
-    case StrategyKind::FeatureDetection: return makeFeatureDetectionStrategy();
+    case StrategyKind::Normal:
+      return std::make_unique<NormalStrategy>();
+    case StrategyKind::GrossMotion:
+      return std::make_unique<GrossMotionStrategy>();
+    case StrategyKind::GraspBias:
+      return std::make_unique<GraspBiasStrategy>();
+    case StrategyKind::FingerFlip:
+      return makeFingerFlipStrategy();
+    case StrategyKind::FeatureDetection:
+      return makeFeatureDetectionStrategy();
   }
   return nullptr;
 }

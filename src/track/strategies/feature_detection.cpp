@@ -21,7 +21,8 @@ class FeatureDetectionStrategy final : public Strategy {
     labelled_.clear();
     for (int f = 0; f < kFingerCount; ++f) {
       const int tipBody = anatomy.fingers[static_cast<std::size_t>(f)][2];
-      labelled_.push_back({c.detection->tips[static_cast<std::size_t>(f)], BodyMask{1} << tipBody, kLabelCapScale});
+      labelled_.push_back(
+          {c.detection->tips[static_cast<std::size_t>(f)], BodyMask{1} << tipBody, kLabelCapScale});
     }
     FrameInput input = c.input;
     input.labelled = labelled_;

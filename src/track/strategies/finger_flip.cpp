@@ -13,12 +13,14 @@ namespace dynahand::track {
 namespace {
 
 // Finger sets tried in turn: each finger alone, then neighbouring pairs.
-constexpr std::array<std::array<int, 2>, 8> kFlipSets = {{
-    {1, -1}, {2, -1}, {3, -1}, {4, -1}, {0, -1}, {1, 2}, {2, 3}, {3, 4}}};
+constexpr std::array<std::array<int, 2>, 8> kFlipSets = {
+    {{1, -1}, {2, -1}, {3, -1}, {4, -1}, {0, -1}, {1, 2}, {2, 3}, {3, 4}}};
 
-constexpr float kCurledFlexion = 1.6f;   // sum of a finger's three flexions above which it is curled, rad
-constexpr float kCurlFraction = 0.85f;   // curled target: this fraction of each joint's flexion range
-constexpr float kDriveTorque = 3.0f;     // N m, per joint
+constexpr float kCurledFlexion =
+    1.6f;  // sum of a finger's three flexions above which it is curled, rad
+constexpr float kCurlFraction =
+    0.85f;                            // curled target: this fraction of each joint's flexion range
+constexpr float kDriveTorque = 3.0f;  // N m, per joint
 constexpr float kDriveTime = 2.0f / 60;  // s to close the angle error
 
 class FingerFlipStrategy final : public Strategy {
@@ -30,14 +32,19 @@ class FingerFlipStrategy final : public Strategy {
     const auto& model = c.rig.model();
     const auto& anatomy = c.rig.anatomy();
     auto& world = c.rig.world();
-    const auto setIndex = static_cast<std::size_t>(c.sequenceTime / static_cast<double>(c.flipPeriod)) % kFlipSets.size();
+    const auto setIndex =
+        static_cast<std::size_t>(c.sequenceTime / static_cast<double>(c.flipPeriod)) %
+        kFlipSets.size();
     joints_.clear();
     for (int finger : kFlipSets[setIndex]) {
       if (finger < 0) continue;
       const auto& bodies = anatomy.fingers[static_cast<std::size_t>(finger)];
       float flexion = 0.0f;
       for (int body : bodies) {
-        flexion += c.startAngles->angles[static_cast<std::size_t>(anatomy.jointOfBody[static_cast<std::size_t>(body)])].x();
+        flexion += c.startAngles
+                       ->angles[static_cast<std::size_t>(
+                           anatomy.jointOfBody[static_cast<std::size_t>(body)])]
+                       .x();
       }
       const bool curled = flexion > (finger == 0 ? 0.6f * kCurledFlexion : kCurledFlexion);
       for (int body : bodies) {
@@ -63,6 +70,8 @@ class FingerFlipStrategy final : public Strategy {
 
 }  // namespace
 
-std::unique_ptr<Strategy> makeFingerFlipStrategy() { return std::make_unique<FingerFlipStrategy>(); }
+std::unique_ptr<Strategy> makeFingerFlipStrategy() {
+  return std::make_unique<FingerFlipStrategy>();
+}
 
 }  // namespace dynahand::track

@@ -17,11 +17,11 @@ namespace dynahand::track {
 struct StrategyContext {
   HandRig& rig;
   Simulator& simulator;
-  const FrameInput& input;   // points, planes, free space of this hand
+  const FrameInput& input;  // points, planes, free space of this hand
   int substeps = 3;
-  double sequenceTime = 0.0;  // s, for strategies that cycle over time
-  float flipPeriod = 0.5f;    // s
-  const FingerDetection* detection = nullptr;  // this frame's five-finger detection
+  double sequenceTime = 0.0;                        // s, for strategies that cycle over time
+  float flipPeriod = 0.5f;                          // s
+  const FingerDetection* detection = nullptr;       // this frame's five-finger detection
   const model::JointAngles* startAngles = nullptr;  // the model angles at the frame start
 };
 

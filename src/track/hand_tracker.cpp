@@ -90,7 +90,7 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
   } else {
     runStrategies(frame, out);
   }
-  fillResult(frame, out);
+  fillResult(out);
 }
 
 void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
@@ -119,12 +119,18 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
         bestError = candidate.error;
         bestKind = candidate.kind;
         world.saveState(best_);
+        bestBreakdown_ = error_;
       }
       if (settings_.keepCandidates) rig_.readPose(candidate.pose);
     }
     out.candidates.push_back(std::move(candidate));
   }
-  if (std::isfinite(bestError)) world.restoreState(best_);
+  if (std::isfinite(bestError)) {
+    world.restoreState(best_);
+  } else {  // no simulation ran (all switched off): measure the state as it is
+    evaluate(frame);
+    bestBreakdown_ = error_;
+  }
   out.simulation = bestKind;
   const float threshold = settings_.lostErrorPerBodyM * static_cast<float>(model_->bodyCount());
   badFrames_ = bestError > threshold ? badFrames_ + 1 : 0;
@@ -211,6 +217,7 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
     if (candidate.error < bestError) {
       bestError = candidate.error;
       world.saveState(best_);
+      bestBreakdown_ = error_;
       out.simulation = candidate.kind;
     }
     if (settings_.keepCandidates) rig_.readPose(candidate.pose);
@@ -224,16 +231,16 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   out.acquired = tracked_;
 }
 
-void HandTracker::fillResult(const HandFrame& frame, HandResult& out) {
+void HandTracker::fillResult(HandResult& out) {
+  // The world holds the winner's state, whose error was measured when it won.
   rig_.readPose(out.pose);
-  const float err = evaluate(frame);
+  const ErrorBreakdown& e = bestBreakdown_;
   out.tracked = tracked_;
-  out.error = err;
-  out.fitError = error_.fitTotal;
-  out.occlusionError = error_.occlusionTotal;
-  out.bodyError.resize(error_.fit.size());
-  for (std::size_t i = 0; i < error_.fit.size(); ++i)
-    out.bodyError[i] = error_.fit[i] + error_.occlusion[i];
+  out.error = e.total;
+  out.fitError = e.fitTotal;
+  out.occlusionError = e.occlusionTotal;
+  out.bodyError.resize(e.fit.size());
+  for (std::size_t i = 0; i < e.fit.size(); ++i) out.bodyError[i] = e.fit[i] + e.occlusion[i];
   out.keypoints21 = model::keypoints21(*model_, out.pose);
   if (model_->hasOpenXrJoints()) out.openxr26 = model::openxr26(*model_, out.pose);
 }

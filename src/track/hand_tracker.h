@@ -44,7 +44,7 @@ class HandTracker {
   // toward thumbSideImage, palm centre at the cloud's centroid.
   model::ModelPose canonicalPose(const HandFrame& frame, const Vec2& axisImage,
                                  const Vec2& thumbSideImage) const;
-  void fillResult(const HandFrame& frame, HandResult& out);
+  void fillResult(HandResult& out);
 
   const model::ArticulatedModel* model_;
   model::Side side_;
@@ -57,7 +57,8 @@ class HandTracker {
   model::JointAngles startAngles_;
   model::JointAngles openAngles_;  // the acquisition pose's angles
   PosedBodies posed_;
-  ErrorBreakdown error_;
+  ErrorBreakdown error_;          // of the last evaluate()
+  ErrorBreakdown bestBreakdown_;  // of the state the world holds after a frame
   bool tracked_ = false;
   int badFrames_ = 0;
 };

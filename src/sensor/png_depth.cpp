@@ -1,5 +1,7 @@
 #include "sensor/png_depth.h"
 
+#include <cstdio>
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -231,6 +233,12 @@ Status writeFileBytes(const std::filesystem::path& file, std::span<const std::ui
   std::filesystem::rename(tmp, file, ec);
   if (ec) return fail(file.string(), "cannot rename the temporary file: " + ec.message());
   return Ok{};
+}
+
+std::string framePngName(int index) {
+  char name[32];
+  std::snprintf(name, sizeof name, "%06d.png", index);
+  return name;
 }
 
 }  // namespace dynahand::sensor

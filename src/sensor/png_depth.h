@@ -44,4 +44,7 @@ Result<std::vector<std::uint8_t>> readFileBytes(const std::filesystem::path& fil
 // Writes to file.tmp then renames, so a crash never leaves a half-written file.
 Status writeFileBytes(const std::filesystem::path& file, std::span<const std::uint8_t> bytes);
 
+// File name of frame `index` in a canonical sequence's depth/ folder: "000042.png".
+std::string framePngName(int index);
+
 }  // namespace dynahand::sensor

@@ -14,12 +14,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string framePngName(int index) {
-  char name[32];
-  std::snprintf(name, sizeof name, "%06d.png", index);
-  return name;
-}
-
 class CanonicalSource final : public FrameSource {
  public:
   CanonicalSource(fs::path depthDir, const SequenceInfo& info)

@@ -12,12 +12,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string framePngName(int index) {
-  char name[32];
-  std::snprintf(name, sizeof name, "%06d.png", index);
-  return name;
-}
-
 }  // namespace
 
 SequenceWriter::SequenceWriter(SequenceWriter&&) noexcept = default;
@@ -78,7 +72,8 @@ Status SequenceWriter::write(const DepthFrame& frame,
   }
   auto png = sensor::encodeDepthPng16(frame);
   if (!png) return Error{where + ": " + png.message()};
-  if (auto ok = sensor::writeFileBytes(dir_ / "depth" / framePngName(frameCount_), *png); !ok)
+  if (auto ok = sensor::writeFileBytes(dir_ / "depth" / sensor::framePngName(frameCount_), *png);
+      !ok)
     return ok;
 
   if (groundTruth && !groundTruth_) {

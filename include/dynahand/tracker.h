@@ -36,8 +36,14 @@ struct TrackerSettings {
   float stepDt = 1.0f / 60.0f;   // s per physics step
   int iterations = 16;           // Gauss-Seidel sweeps per step
   int relaxIterations = 4;       // bias-removal sweeps per step
-  float pullForce = 600.0f;      // total surface-row force (N), split over the points
+  float pullForce = 4000.0f;     // total surface-row force (N), split over the points
   float boundaryForce = 200.0f;  // per boundary row (N)
+  float surfaceErp = 0.9f;       // fraction of a surface row's gap closed per step, [0, 1]
+  float velocityRetention = 0.8f;  // per physics step: the prior motion kept (momentum)
+  // The forearm is held at its frame-start position along its own axis (only): samples on
+  // the arm's sides cannot say where along the arm it is, so without this the hand slides
+  // along the arm when the fingers curl over the palm. Capped, so the hand's data wins.
+  float forearmHoldForce = 1000.0f;  // N
   // Lost when the winner's error per body stays above this (m) for lostAfterFrames
   // frames, or when the hand leaves the view.
   float lostErrorPerBodyM = 0.02f;

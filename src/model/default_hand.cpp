@@ -58,8 +58,8 @@ void addRing(std::vector<Vec3>& out, const Vec3& centre, float halfWidth, float 
 // A tapered capsule along +z: spheres of radius r0 at z = 0 and r1 at z = length.
 std::vector<Vec3> capsule(float r0, float r1, float length) {
   std::vector<Vec3> points;
-  addEllipsoid(points, Vec3::Zero(), Vec3::Constant(r0), 5, 8);
-  addEllipsoid(points, Vec3(0, 0, length), Vec3::Constant(r1), 5, 8);
+  addEllipsoid(points, Vec3::Zero(), Vec3::Constant(r0), 3, 6);
+  addEllipsoid(points, Vec3(0, 0, length), Vec3::Constant(r1), 3, 6);
   return points;
 }
 

@@ -13,6 +13,7 @@ physics::WorldSettings worldSettings(const TrackerSettings& s) {
   physics::WorldSettings w;
   w.iterations = s.iterations;
   w.relaxIterations = s.relaxIterations;
+  w.surfaceErp = s.surfaceErp;
   return w;
 }
 
@@ -30,7 +31,9 @@ SimulationSettings simulationSettings(const TrackerSettings& s) {
 Result<std::unique_ptr<HandTracker>> HandTracker::create(const model::ArticulatedModel& model,
                                                          model::Side side,
                                                          const TrackerSettings& settings) {
-  auto rig = HandRig::create(model, worldSettings(settings), RigSettings{}, settings.stepDt);
+  RigSettings rigSettings;
+  rigSettings.velocityRetention = settings.velocityRetention;
+  auto rig = HandRig::create(model, worldSettings(settings), rigSettings, settings.stepDt);
   if (!rig) return rig.error();
   return std::unique_ptr<HandTracker>(new HandTracker(model, side, settings, std::move(*rig)));
 }
@@ -97,6 +100,10 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   auto& world = rig_.world();
   world.saveState(start_);
   rig_.readPose(pose_);
+  const int forearm = rig_.anatomy().forearm;
+  const Pose forearmPose = world.pose(forearm);
+  const AxisHold hold{forearm, Vec3::Zero(), forearmPose.p,
+                      forearmPose.rotate(rig_.anatomy().forearmAxis), settings_.forearmHoldForce};
   model::jointAnglesInto(*model_, pose_, startAngles_);
   float bestError = std::numeric_limits<float>::infinity();
   StrategyKind bestKind = StrategyKind::Normal;
@@ -104,7 +111,8 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     world.restoreState(start_);
     StrategyContext context{rig_,
                             simulator_,
-                            FrameInput{frame.points, frame.planes, {}, frame.cloud},
+                            FrameInput{frame.points, frame.planes, {}, frame.cloud,
+                                       settings_.forearmHoldForce > 0.0f ? &hold : nullptr},
                             settings_.substeps,
                             frame.time,
                             settings_.flipPeriodS,

@@ -55,6 +55,11 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
   for (const LabelledPoint& l : input.labelled)
     attach(l.point, l.bodies, cap * l.capScale, true, nullptr);
 
+  if (input.hold != nullptr) {
+    const AxisHold& h = *input.hold;
+    rows.addSurface(h.body, h.localPoint, h.axis, h.target, h.force * settings_.stepDt);
+  }
+
   const float boundaryCap = settings_.boundaryForce * settings_.stepDt;
   for (const BoundaryPlane& plane : input.planes) {
     // BoundaryPlane keeps points with normal·p <= 0: the allowed side of the world

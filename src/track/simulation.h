@@ -34,12 +34,22 @@ struct LabelledPoint {
   float capScale = 1.0f;  // times the ordinary surface-row cap
 };
 
+// A one-dimensional hold of a body point at a target along a fixed world axis.
+struct AxisHold {
+  int body = 0;
+  Vec3 localPoint = Vec3::Zero();  // body frame, m
+  Vec3 target = Vec3::Zero();      // world, m
+  Vec3 axis = Vec3::UnitZ();       // world, unit
+  float force = 0.0f;              // cap, N
+};
+
 // Everything one simulation needs for the current frame.
 struct FrameInput {
   std::span<const Vec3> points;  // voxel cloud of this hand, m
   std::span<const BoundaryPlane> planes;
   std::span<const LabelledPoint> labelled;
   const CloudFrame* cloud = nullptr;  // for free-space queries
+  const AxisHold* hold = nullptr;     // optional
 };
 
 class Simulator {

@@ -56,8 +56,8 @@ void BM_TrackFrame(benchmark::State& state, const std::string& clip, const std::
     }
     const auto t0 = std::chrono::steady_clock::now();
     const TrackResult& r = (*tracker)->track(frames[i]);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                     .count());
+    ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     if (!r.hands.empty()) points += r.hands[0].pointCount;
     benchmark::DoNotOptimize(r);
     i = (i + 1) % frames.size();

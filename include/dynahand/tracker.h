@@ -32,13 +32,13 @@ struct TrackerSettings {
   int hands = 1;      // 1, or 2 (k-means split, paper "Tracking of Multiple Hands")
   // Strategies to run, by StrategyKind (ablations switch some off).
   std::array<bool, kStrategyCount> strategies = {true, true, true, true, true};
-  int substeps = 3;              // physics steps per frame per simulation
-  float stepDt = 1.0f / 60.0f;   // s per physics step
-  int iterations = 16;           // Gauss-Seidel sweeps per step
-  int relaxIterations = 4;       // bias-removal sweeps per step
-  float pullForce = 4000.0f;     // total surface-row force (N), split over the points
-  float boundaryForce = 200.0f;  // per boundary row (N)
-  float surfaceErp = 0.9f;       // fraction of a surface row's gap closed per step, [0, 1]
+  int substeps = 3;                // physics steps per frame per simulation
+  float stepDt = 1.0f / 60.0f;     // s per physics step
+  int iterations = 16;             // Gauss-Seidel sweeps per step
+  int relaxIterations = 4;         // bias-removal sweeps per step
+  float pullForce = 4000.0f;       // total surface-row force (N), split over the points
+  float boundaryForce = 200.0f;    // per boundary row (N)
+  float surfaceErp = 0.9f;         // fraction of a surface row's gap closed per step, [0, 1]
   float velocityRetention = 0.8f;  // per physics step: the prior motion kept (momentum)
   // The forearm is held at its frame-start position along its own axis (only): samples on
   // the arm's sides cannot say where along the arm it is, so without this the hand slides

@@ -111,7 +111,10 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     world.restoreState(start_);
     StrategyContext context{rig_,
                             simulator_,
-                            FrameInput{frame.points, frame.planes, {}, frame.cloud,
+                            FrameInput{frame.points,
+                                       frame.planes,
+                                       {},
+                                       frame.cloud,
                                        settings_.forearmHoldForce > 0.0f ? &hold : nullptr},
                             settings_.substeps,
                             frame.time,

@@ -29,6 +29,21 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
   Vec2 axis(0.0f, -1.0f);  // fingers up when there is no arm direction
   if (cloud.segment.armDirectionImage.norm() > 0.5f)
     axis = -cloud.segment.armDirectionImage.normalized();
+  // The arm's direction is only roughly the hand's (wrist deviation, a short or noisy arm):
+  // scanlines are tried across it and turned up to 40 degrees either way, nearest first.
+  for (const float turnDeg : {0.0f, 10.0f, -10.0f, 20.0f, -20.0f, 30.0f, -30.0f, 40.0f, -40.0f}) {
+    const float a = turnDeg * 3.14159265f / 180.0f;
+    const Vec2 turned(std::cos(a) * axis.x() - std::sin(a) * axis.y(),
+                      std::sin(a) * axis.x() + std::cos(a) * axis.y());
+    if (scanAlong(cloud, c, turned)) break;
+  }
+  return result_;
+}
+
+bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec2& axis) {
+  const Intrinsics& k = cloud.intrinsics;
+  const int width = k.width;
+  const PixelBox& box = cloud.segmentBox;
   const Vec2 across(-axis.y(), axis.x());
 
   float sMax = -1e9f, tMin = 1e9f, tMax = -1e9f;
@@ -60,8 +75,6 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
 
   segments_.clear();
   previousRuns_.clear();
-  int fiveRow = -1;
-  std::array<int, 5> fiveSegments{};
   for (int row = 0; row < rows; ++row) {
     const float s = sMax - static_cast<float>(row);
     runs_.clear();
@@ -80,43 +93,41 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
     // Continue segments: a run overlapping previous runs joins the first one's segment;
     // overlapping several means they came together.
     for (Run& run : runs_) {
+      int overlaps = 0;
       for (const Run& prev : previousRuns_) {
         if (prev.end > run.begin && prev.begin < run.end) {
-          if (run.segment < 0) {
-            run.segment = prev.segment;
-          }
+          if (run.segment < 0) run.segment = prev.segment;
+          ++overlaps;
         }
       }
       if (run.segment < 0) {
         run.segment = static_cast<int>(segments_.size());
         segments_.push_back({row, 0.5f * static_cast<float>(run.begin + run.end - 1), 0});
       }
-      ++segments_[static_cast<std::size_t>(run.segment)].length;
-    }
-    if (fiveRow < 0 && runs_.size() == 5) {
-      bool fingerLike = true;
-      for (int i = 0; i < 5; ++i) {
-        const Run& r = runs_[static_cast<std::size_t>(i)];
-        const float w = static_cast<float>(r.end - r.begin);
-        fingerLike = fingerLike && w >= minWidth && w <= maxWidth;
-        for (int j = 0; j < i; ++j)
-          fingerLike = fingerLike && runs_[static_cast<std::size_t>(j)].segment != r.segment;
-      }
-      if (fingerLike) {
-        fiveRow = row;
-        for (int i = 0; i < 5; ++i)
-          fiveSegments[static_cast<std::size_t>(i)] = runs_[static_cast<std::size_t>(i)].segment;
+      Segment& seg = segments_[static_cast<std::size_t>(run.segment)];
+      if (overlaps > 1) seg.decided = true;  // merged: no longer one finger on its own
+      ++seg.length;
+      if (!seg.decided && seg.length == minLength) {
+        seg.decided = true;
+        const float w = static_cast<float>(run.end - run.begin);
+        seg.fingerLike = w >= minWidth && w <= maxWidth;
       }
     }
-    // Fire once the five fingers have come together into at most two runs (palm, and
-    // possibly the thumb still apart) and each finger was long enough.
-    if (fiveRow >= 0 && runs_.size() <= 2 && row > fiveRow) {
-      bool longEnough = true;
-      for (int segIndex : fiveSegments) {
-        longEnough =
-            longEnough && segments_[static_cast<std::size_t>(segIndex)].length >= minLength;
-      }
-      if (!longEnough) return result_;
+    // Fire once five fingers were seen apart and the scan has reached the palm: at most two
+    // runs (the palm, and possibly the thumb still apart; the thumb, lower on the hand, may
+    // start after the four fingers have met).
+    std::array<int, 5> fiveSegments{};
+    int fingers = 0;
+    for (std::size_t i = 0; i < segments_.size(); ++i) {
+      if (!segments_[i].fingerLike) continue;
+      if (fingers < 5) fiveSegments[static_cast<std::size_t>(fingers)] = static_cast<int>(i);
+      ++fingers;
+    }
+    if (fingers > 5) return false;  // more finger-like things than fingers: not this way
+    const bool undecided = std::any_of(runs_.begin(), runs_.end(), [&](const Run& r) {
+      return !segments_[static_cast<std::size_t>(r.segment)].decided;
+    });
+    if (fingers == 5 && runs_.size() <= 2 && !undecided) {
       // Fingertips: the top of each segment, ordered across the hand.
       std::array<std::pair<float, int>, 5> order;
       for (int i = 0; i < 5; ++i) {
@@ -152,16 +163,16 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
             }
           }
         }
-        if (depth <= 0.0f) return result_;
+        if (depth <= 0.0f) return false;
         result_.tipPixels[static_cast<std::size_t>(i)] = p;
         result_.tips[static_cast<std::size_t>(i)] = k.deproject(p.x(), p.y(), depth);
       }
       result_.fired = true;
-      return result_;
+      return true;
     }
     std::swap(runs_, previousRuns_);
   }
-  return result_;
+  return false;
 }
 
 }  // namespace dynahand::track

@@ -1,9 +1,10 @@
 // The paper's naive five-finger detector ("Feature Detection"): scanlines across the
 // hand's segmentation mask, from the fingertips toward the wrist, follow contiguous
-// segments; it fires when five segments (fingers) run side by side and then come
-// together (the palm). The top of each segment is a fingertip. Scanlines run across
-// the hand axis (away from where the arm leaves the region), so a hand rotated in the
-// image plane is found too.
+// segments; it fires when five finger-wide segments have each run far enough on their
+// own and then come together (the palm; the thumb, lower on the hand, may start after the
+// four fingers have met). The top of each segment is a fingertip. Scanlines run across
+// the hand axis (away from where the arm leaves the region, turned up to 40 degrees either
+// way when that fails), so a hand rotated in the image plane is found too.
 #pragma once
 
 #include <array>
@@ -43,8 +44,13 @@ class FingerDetector {
   struct Segment {
     int topRow;
     float topColumn;
-    int length;  // rows
+    int length;               // rows
+    bool decided = false;     // fingerLike is final (minLength rows reached, or merged first)
+    bool fingerLike = false;  // ran minLength rows apart from the others, finger-wide
   };
+  // One scan with scanlines across `axis` (wrist -> fingertips, image) through the mask
+  // centroid c; fills result_ and returns true when it fires.
+  bool scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec2& axis);
   FingerDetectorSettings settings_;
   FingerDetection result_;
   std::vector<Run> runs_, previousRuns_;

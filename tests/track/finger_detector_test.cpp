@@ -1,0 +1,85 @@
+// The five-finger detector on rendered hands: fires on a spread open hand at any turn in
+// the image plane, with each fingertip where the finger ends; stays quiet on a fist.
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+#include "dynahand/cloud.h"
+#include "dynahand/model.h"
+#include "track/finger_detector.h"
+#include "track/synthetic_hand.h"
+
+namespace dynahand::track {
+namespace {
+
+constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
+
+model::JointAngles spreadAngles(const model::ArticulatedModel& m) {
+  model::JointAngles a = model::zeroAngles(m);
+  a.angles[1].y() = 35.0f * kDeg;    // thumb metacarpal out
+  a.angles[4].y() = 15.0f * kDeg;    // index
+  a.angles[10].y() = -12.0f * kDeg;  // ring
+  a.angles[13].y() = -25.0f * kDeg;  // pinky
+  model::clampToLimits(m, a);
+  return a;
+}
+
+model::JointAngles fistAngles(const model::ArticulatedModel& m) {
+  model::JointAngles a = model::zeroAngles(m);
+  for (std::size_t j = 4; j < 16; ++j) a.angles[j].x() = 90.0f * kDeg;
+  a.angles[1].x() = 40.0f * kDeg;
+  model::clampToLimits(m, a);
+  return a;
+}
+
+struct Detected {
+  bool fired = false;
+  float worstTipErrorM = 1.0f;
+};
+
+Detected detectAt(model::JointAngles angles, float turnDeg) {
+  const auto hand = model::makeDefaultHand();
+  test::SyntheticCamera camera("tof");
+  const Pose upright = test::facingCamera(hand, Vec3(0.0f, 0.0f, 0.40f));
+  const Quat turn(Eigen::AngleAxisf(turnDeg * kDeg, Vec3::UnitZ()));
+  angles.root = Pose{turn * upright.p, turn * upright.q};
+  const model::ModelPose pose = model::forwardKinematics(hand, angles);
+  const DepthFrame depth = camera.render(hand, pose, 0, 0.0);
+  // The spread hand spans about 22 cm from its thumb tip (the nearest point) to the little
+  // fingertip: more than the default segmentation radius, which would cut the little finger.
+  CloudConfig config;
+  config.segmentation.handRadiusM = 0.24f;
+  CloudPipeline pipeline(camera.intrinsics(), config);
+  CloudFrame cloud;
+  EXPECT_TRUE(pipeline.process(depth, cloud).ok());
+  FingerDetector detector;
+  const FingerDetection& d = detector.detect(cloud);
+  Detected out;
+  out.fired = d.fired;
+  if (d.fired) {
+    const auto k = model::keypoints21(hand, pose);
+    out.worstTipErrorM = 0.0f;
+    for (std::size_t f = 0; f < 5; ++f) {
+      out.worstTipErrorM = std::max(out.worstTipErrorM, (d.tips[f] - k[4 + 4 * f]).norm());
+    }
+  }
+  return out;
+}
+
+TEST(FingerDetector, FindsTheFiveFingertipsOfASpreadHandAtAnyTurn) {
+  const auto hand = model::makeDefaultHand();
+  for (float turn : {0.0f, 30.0f, -45.0f, 70.0f}) {
+    const Detected d = detectAt(spreadAngles(hand), turn);
+    EXPECT_TRUE(d.fired) << "turned " << turn << " degrees";
+    // The tip sample sits a little inside the finger and on its front surface.
+    EXPECT_LT(d.worstTipErrorM, 0.018f) << "turned " << turn << " degrees";
+  }
+}
+
+TEST(FingerDetector, StaysQuietOnAFist) {
+  const auto hand = model::makeDefaultHand();
+  EXPECT_FALSE(detectAt(fistAngles(hand), 0.0f).fired);
+}
+
+}  // namespace
+}  // namespace dynahand::track

@@ -139,11 +139,16 @@ class Rig {
 
 class Keypoints {
   constructor(color, parent) {
-    const sphere = new THREE.SphereGeometry(0.0045, 10, 8);
-    this.spheres = new THREE.InstancedMesh(sphere, new THREE.MeshBasicMaterial({ color }), 21);
+    const sphere = new THREE.SphereGeometry(0.003, 10, 8);
+    // Drawn over the meshes (no depth test) so keypoints inside or behind the hand show.
+    const material = new THREE.MeshBasicMaterial({ color, depthTest: false });
+    this.spheres = new THREE.InstancedMesh(sphere, material, 21);
     const lineGeometry = new THREE.BufferGeometry();
     lineGeometry.setAttribute('position', new THREE.Float32BufferAttribute(BONES.length * 6, 3));
-    this.lines = new THREE.LineSegments(lineGeometry, new THREE.LineBasicMaterial({ color }));
+    this.lines = new THREE.LineSegments(lineGeometry,
+      new THREE.LineBasicMaterial({ color, depthTest: false }));
+    this.spheres.renderOrder = 2;
+    this.lines.renderOrder = 2;
     this.group = new THREE.Group();
     this.group.add(this.spheres, this.lines);
     this.group.visible = false;
@@ -259,7 +264,7 @@ function frameHand(result, truth) {
   const p = points[9];  // middle finger MCP: the middle of the hand
   const beside = truthBeside && layers.truth.available ? TRUTH_BESIDE_M / 2 : 0;
   controls.target.set(p[0] + beside, -p[1], -p[2]);
-  camera.position.set(p[0] + beside + 0.12, -p[1] + 0.1, -p[2] + 0.32);
+  camera.position.set(p[0] + beside + 0.03, -p[1] + 0.07, -p[2] + 0.42);
   controls.update();
   framed = true;
 }

@@ -130,6 +130,9 @@ const CommandRegistration kRegistration{Command{
       sub.add_flag("--fast", o->fast, "track as fast as possible instead of at the input's rate");
       sub.add_option("--stop-after", o->stopAfter, "stop after this many frames")
           ->check(CLI::Range(1, 100000000));
+      sub.add_option("--max-client-queue", o->server.maxQueuedBytesPerClient,
+                     "bytes waiting for one client before it skips frames")
+          ->check(CLI::Range(std::size_t{1024}, std::size_t{1} << 30));
       sub.add_option("--web-root", o->webRoot, "serve the page from this folder instead");
       sub.footer(
           "Open the printed address in a browser. Other programs can read the stream: see\n"

@@ -5,6 +5,7 @@
 #include <websocketpp/config/asio_no_tls.hpp>
 #include <websocketpp/server.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <fstream>
@@ -231,6 +232,15 @@ std::unique_ptr<ViewerServer> ViewerServer::start(const ServerOptions& options,
   s.set_close_handler([p](Handle h) { p->onClose(h); });
   s.set_message_handler([p](Handle h, WsServer::message_ptr m) { p->onMessage(h, m); });
   s.set_http_handler([p](Handle h) { p->onHttp(h); });
+  // A small kernel send buffer keeps a slow client's backlog in our queue, where it is
+  // counted and frames are skipped, instead of megabytes of stale frames in the kernel.
+  s.set_socket_init_handler([p](Handle, asio::ip::tcp::socket& socket) {
+    asio::error_code ignored;
+    socket.set_option(asio::ip::tcp::no_delay(true), ignored);
+    socket.set_option(asio::socket_base::send_buffer_size(static_cast<int>(std::min<std::size_t>(
+                          p->options.maxQueuedBytesPerClient, std::size_t{256} << 10))),
+                      ignored);
+  });
 
   asio::error_code aec;
   const auto address = asio::ip::make_address(options.host, aec);

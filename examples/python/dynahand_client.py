@@ -26,8 +26,14 @@ MAX_MESSAGE_BYTES = 64 << 20  # refuse anything larger than a sane frame
 class WebSocket:
     """A minimal client: text messages in, masked text frames out, ping answered."""
 
-    def __init__(self, host, port, path="/", timeout=10.0):
-        self.sock = socket.create_connection((host, port), timeout=timeout)
+    def __init__(self, host, port, path="/", timeout=10.0, sock=None):
+        """sock: an unconnected socket to use (e.g. with options set); default a new one."""
+        if sock is None:
+            self.sock = socket.create_connection((host, port), timeout=timeout)
+        else:
+            self.sock = sock
+            self.sock.settimeout(timeout)
+            self.sock.connect((host, port))
         key = base64.b64encode(os.urandom(16)).decode()
         request = (
             f"GET {path} HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"

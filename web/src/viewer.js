@@ -33,10 +33,16 @@ camera.position.set(0.1, 0.12, 0.05);
 const controls = new OrbitControls(camera, canvas);
 controls.target.set(0, 0, -0.45);
 controls.update();
-scene.add(new THREE.HemisphereLight(0xffffff, 0x404850, 1.6));
-const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x404850, 1.2));
+const sun = new THREE.DirectionalLight(0xffffff, 1.0);
 sun.position.set(0.5, 1.0, 0.8);
 scene.add(sun);
+// A headlight: whatever side of the hand the orbit camera looks at is lit.
+const headlight = new THREE.DirectionalLight(0xffffff, 1.4);
+headlight.position.set(0, 0, 0);
+headlight.target.position.set(0, 0, -1);
+camera.add(headlight, headlight.target);
+scene.add(camera);
 
 // The depth camera's frame (x right, y down, z forward) turned to three's y up, -z forward.
 const world = new THREE.Group();
@@ -105,9 +111,12 @@ function hullGeometry(body) {
 function solidMaterial(color) {
   return new THREE.MeshStandardMaterial({ color, roughness: 0.65, metalness: 0.0 });
 }
+// Faint, and pushed back in depth so that where a ghost coincides with the winner's
+// surface the winner shows; only where it differs does the ghost appear.
 function ghostMaterial(color, opacity) {
   return new THREE.MeshStandardMaterial({
     color, transparent: true, opacity, depthWrite: false, roughness: 0.8,
+    polygonOffset: true, polygonOffsetFactor: 2, polygonOffsetUnits: 8,
   });
 }
 

@@ -55,10 +55,12 @@ int runServe(ServeCommandOptions o) {
   if (server->pageAvailable()) {
     std::printf("viewer at http://%s/  stream at ws://%s/\n", address.c_str(), address.c_str());
   } else {
-    std::printf(
-        "stream at ws://%s/  (viewer page unavailable: this build had no web/node_modules; run "
-        "scripts/install-deps.sh and rebuild)\n",
-        address.c_str());
+    const std::string why =
+        o.webRoot.empty()
+            ? "this build had no web/node_modules; run scripts/install-deps.sh and rebuild"
+            : "no index.html in " + o.webRoot;
+    std::printf("stream at ws://%s/  (viewer page unavailable: %s)\n", address.c_str(),
+                why.c_str());
   }
   std::printf("Ctrl-C stops\n");
   std::fflush(stdout);

@@ -101,8 +101,8 @@ void BM_TrackAndServe(benchmark::State& state) {
     const Status s = (*session)->step(server.get());
     if (!s) state.SkipWithError(s.message().c_str());
   }
-  state.counters["fps"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                             benchmark::Counter::kIsRate);
+  state.counters["fps"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   const ServerStats stats = server->stats();
   state.counters["sent"] = static_cast<double>(stats.framesSent);
   state.counters["dropped"] = static_cast<double>(stats.framesDropped);

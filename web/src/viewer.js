@@ -308,8 +308,22 @@ function onScene(msg) {
     return mesh;
   });
   layers.scene.available = true;
+  sceneFramed = false;
   buildLayerToggles();
 }
+// Points the orbit camera at the whole scene, from above and in front.
+function frameScene() {
+  sceneRoot.updateMatrixWorld(true);
+  const bounds = new THREE.Box3().setFromObject(layers.scene.group);
+  if (bounds.isEmpty()) return;
+  const centre = bounds.getCenter(new THREE.Vector3());
+  const size = Math.max(0.05, bounds.getSize(new THREE.Vector3()).length());
+  controls.target.copy(centre);
+  camera.position.set(centre.x + 0.3 * size, centre.y + 0.6 * size, centre.z + 0.9 * size);
+  controls.update();
+  sceneFramed = true;
+}
+let sceneFramed = false;
 function onScenePoses(msg) {
   msg.poses.forEach(({ p, q }, i) => {
     const mesh = sceneRigs[i];
@@ -317,6 +331,7 @@ function onScenePoses(msg) {
     mesh.position.set(p[0], p[1], p[2]);
     mesh.quaternion.set(q[1], q[2], q[3], q[0]);
   });
+  if (!sceneFramed && !hands.length) frameScene();
   stats.framesReceived += 1;
   document.getElementById('frame-count').textContent = String(stats.framesReceived);
   document.getElementById('frame-index').textContent = String(msg.step);
@@ -328,7 +343,8 @@ let truthBeside = true;
 function buildLayerToggles() {
   const box = document.getElementById('layers');
   const toggles = Object.entries(layers)
-    .filter(([name, layer]) => !['truth', 'scene'].includes(name) || layer.available)
+    .filter(([name, layer]) => (['truth', 'scene'].includes(name) ? layer.available
+      : hands.length > 0))
     .map(([name, layer]) => checkbox(layer.label, layer.group.visible, (on) => {
       layer.group.visible = on;
     }, `layer-${name}`));

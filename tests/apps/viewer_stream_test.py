@@ -113,7 +113,7 @@ try:
     elapsed = time.time() - started
     rate = len(during) / elapsed
     check("a client that does not read does not slow the others",
-          len(during) == 150 and rate > 5.0, f"{rate:.1f} frames/s while it stalls")
+          len(during) == 150 and rate > 1.0, f"{rate:.1f} frames/s while it stalls")
     # What was already on its way (socket buffers, the write in flight) arrives in order,
     # then the frames the server skipped show as a gap.
     slow.sock.settimeout(10)

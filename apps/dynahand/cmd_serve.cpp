@@ -2,7 +2,6 @@
 // the poses (docs/formats/viewer-stream.md) on localhost.
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <thread>
 
@@ -22,28 +21,10 @@ struct ServeCommandOptions {
   int stopAfter = 0;  // frames; 0 = until Ctrl-C
 };
 
-// The page's folder: --web-root, else installed beside the program
-// (bin/../share/dynahand/viewer), else the build tree's copy.
-std::filesystem::path findViewerPage(const std::string& webRoot) {
-  if (!webRoot.empty()) return webRoot;
-  std::error_code ec;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    const auto installed = exe.parent_path().parent_path() / "share/dynahand/viewer";
-    if (std::filesystem::exists(installed / "index.html")) return installed;
-  }
-#ifdef DYNAHAND_VIEWER_BUILD_DIR
-  if (std::filesystem::exists(std::filesystem::path(DYNAHAND_VIEWER_BUILD_DIR) / "index.html")) {
-    return DYNAHAND_VIEWER_BUILD_DIR;
-  }
-#endif
-  return {};
-}
-
 int runServe(ServeCommandOptions o) {
   auto session = viewer::ServeSession::open(o.serve);
   if (!session) throw UsageError(session.message());
-  o.server.webRoot = findViewerPage(o.webRoot);
+  o.server.webRoot = viewer::findViewerPage(o.webRoot);
   std::string error;
   auto server = viewer::ViewerServer::start(o.server, &error);
   if (!server) {

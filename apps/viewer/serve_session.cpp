@@ -64,6 +64,19 @@ struct ServeSession::Impl {
   }
 };
 
+std::filesystem::path findViewerPage(const std::string& webRoot) {
+  if (!webRoot.empty()) return webRoot;
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const auto installed = exe.parent_path().parent_path() / "share/dynahand/viewer";
+    if (std::filesystem::exists(installed / "index.html")) return installed;
+  }
+  const std::filesystem::path built = DYNAHAND_VIEWER_BUILD_DIR;
+  if (std::filesystem::exists(built / "index.html")) return built;
+  return {};
+}
+
 ServeSession::ServeSession(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ServeSession::~ServeSession() = default;
 

@@ -4,6 +4,7 @@
 // when somebody is watching.
 #pragma once
 
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -24,6 +25,11 @@ struct ServeOptions {
   float handWidth = 0.085f;
   track::TrackerSettings settings;
 };
+
+// The viewer page's folder for ServerOptions::webRoot: `webRoot` when given, else the
+// installed copy beside the program (bin/../share/dynahand/viewer), else the build tree's;
+// empty when there is none (the server then streams without its page).
+std::filesystem::path findViewerPage(const std::string& webRoot = {});
 
 class ServeSession {
  public:

@@ -10,6 +10,8 @@ packages=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libopenni2-dev libfreenect-dev
+  libwebsocketpp-dev libasio-dev  # dynahand serve: WebSocket + HTTP server
+  chromium                        # the viewer's browser test (driven by playwright-core)
 )
 
 if ! command -v dpkg-query >/dev/null 2>&1 || ! command -v apt-get >/dev/null 2>&1; then
@@ -24,7 +26,24 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
-[[ ${#missing[@]} -eq 0 ]] && exit 0
+# The viewer page's JavaScript packages (three.js, esbuild, playwright-core), pinned by
+# web/package-lock.json, installed into web/node_modules when missing.
+install_web_packages() {
+  local web
+  web="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/web"
+  [[ -d "$web/node_modules/three" && -d "$web/node_modules/playwright-core" ]] && return 0
+  if ! command -v npm >/dev/null 2>&1; then
+    echo "install-deps: npm not found; the viewer page and its browser test will be skipped." >&2
+    return 0
+  fi
+  echo "install-deps: npm ci in web/"
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+}
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  install_web_packages
+  exit 0
+fi
 
 sudo_cmd=()
 if [[ $(id -u) -ne 0 ]]; then
@@ -45,3 +64,4 @@ if ! { "${sudo_cmd[@]}" apt-get update -qq && \
   exit 1
 fi
 rm -f "$log"
+install_web_packages

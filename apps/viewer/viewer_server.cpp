@@ -1,0 +1,326 @@
+#include "viewer_server.h"
+
+#define ASIO_STANDALONE
+#include <nlohmann/json.hpp>
+#include <websocketpp/config/asio_no_tls.hpp>
+#include <websocketpp/server.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+#include <utility>
+
+namespace dynahand::viewer {
+namespace {
+
+using WsServer = websocketpp::server<websocketpp::config::asio>;
+using Handle = websocketpp::connection_hdl;
+using Message = std::shared_ptr<const std::string>;
+
+const char* contentType(const std::filesystem::path& file) {
+  const std::string ext = file.extension().string();
+  if (ext == ".html") return "text/html; charset=utf-8";
+  if (ext == ".js") return "text/javascript; charset=utf-8";
+  if (ext == ".css") return "text/css; charset=utf-8";
+  if (ext == ".json") return "application/json";
+  if (ext == ".png") return "image/png";
+  if (ext == ".svg") return "image/svg+xml";
+  return "application/octet-stream";
+}
+
+// Only plain relative names below the web root: letters, digits, '-', '_', '.', '/' and
+// no "..", so a request can never leave the folder.
+bool safeResource(const std::string& path) {
+  if (path.empty() || path.size() > 200 || path.find("..") != std::string::npos) return false;
+  for (const char c : path) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '-' || c == '_' || c == '.' || c == '/';
+    if (!ok) return false;
+  }
+  return path.front() != '/';
+}
+
+const char* kPageUnavailable =
+    "<!doctype html><title>dynahand viewer</title><h1>Viewer page unavailable</h1>"
+    "<p>This build has no viewer page: web/node_modules was missing when it was built. Run "
+    "<code>scripts/install-deps.sh</code> (it runs <code>npm ci</code> in web/) and rebuild. "
+    "The WebSocket stream on this port works without it (docs/formats/viewer-stream.md).</p>";
+
+}  // namespace
+
+struct ViewerServer::Impl {
+  ServerOptions options;
+  WsServer server;
+  std::thread ioThread;
+  int boundPort = 0;
+  bool page = false;
+
+  // Touched only on the I/O thread.
+  std::set<Handle, std::owner_less<Handle>> clients;
+
+  mutable std::mutex mutex;  // guards everything below
+  std::vector<Message> welcome;
+  Message latest;
+  bool flushPosted = false;
+  std::vector<ClientCommand> commands;
+  ServerStats stats;
+  std::atomic<int> clientCount{0};
+
+  void sendTo(Handle h, const std::string& text) {
+    websocketpp::lib::error_code ec;
+    server.send(h, text, websocketpp::frame::opcode::text, ec);
+  }
+
+  void reject(Handle h, const std::string& why, bool close) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      ++stats.messagesRejected;
+    }
+    sendTo(h, nlohmann::json{{"type", "error"}, {"version", 1}, {"message", why}}.dump());
+    if (close) {
+      websocketpp::lib::error_code ec;
+      server.close(h, websocketpp::close::status::policy_violation, why.substr(0, 100), ec);
+    }
+  }
+
+  void onMessage(Handle h, const WsServer::message_ptr& msg) {
+    if (msg->get_opcode() != websocketpp::frame::opcode::text) {
+      reject(h, "only text (JSON) messages are accepted", true);
+      return;
+    }
+    const nlohmann::json j = nlohmann::json::parse(msg->get_payload(), nullptr, false);
+    if (j.is_discarded() || !j.is_object()) {
+      reject(h, "malformed message: expected a JSON object", true);
+      return;
+    }
+    const auto type = j.find("type");
+    const auto action = j.find("action");
+    if (type == j.end() || *type != "control" || action == j.end() || !action->is_string()) {
+      reject(h, "unknown message: expected {\"type\":\"control\",\"action\":...}", false);
+      return;
+    }
+    ClientCommand command;
+    if (*action == "pause") {
+      command = ClientCommand::Pause;
+    } else if (*action == "resume") {
+      command = ClientCommand::Resume;
+    } else if (*action == "step") {
+      command = ClientCommand::Step;
+    } else {
+      reject(h, "unknown action: expected pause, resume or step", false);
+      return;
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    commands.push_back(command);
+  }
+
+  void onOpen(Handle h) {
+    clients.insert(h);
+    clientCount = static_cast<int>(clients.size());
+    std::vector<Message> hello;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      hello = welcome;
+      stats.clients = clientCount;
+    }
+    for (const Message& m : hello) sendTo(h, *m);
+  }
+
+  void onClose(Handle h) {
+    auto con = server.get_con_from_hdl(h);
+    const bool tooBig = con->get_local_close_code() == websocketpp::close::status::message_too_big;
+    clients.erase(h);
+    clientCount = static_cast<int>(clients.size());
+    std::lock_guard<std::mutex> lock(mutex);
+    stats.clients = clientCount;
+    if (tooBig) ++stats.messagesRejected;
+  }
+
+  void onHttp(Handle h) {
+    auto con = server.get_con_from_hdl(h);
+    std::string resource = con->get_resource();
+    resource = resource.substr(0, resource.find('?'));
+    if (resource == "/") resource = "/index.html";
+    const std::string relative = resource.substr(1);
+    if (!page) {
+      con->set_status(websocketpp::http::status_code::service_unavailable);
+      con->append_header("Content-Type", "text/html; charset=utf-8");
+      con->set_body(kPageUnavailable);
+      return;
+    }
+    std::ifstream in;
+    if (safeResource(relative)) in.open(options.webRoot / relative, std::ios::binary);
+    if (!in.is_open()) {  // a stream never opened has no fail bit
+      con->set_status(websocketpp::http::status_code::not_found);
+      con->append_header("Content-Type", "text/plain");
+      con->set_body("not found\n");
+      return;
+    }
+    std::ostringstream body;
+    body << in.rdbuf();
+    con->set_status(websocketpp::http::status_code::ok);
+    con->append_header("Content-Type", contentType(relative));
+    con->append_header("Cache-Control", "no-cache");
+    con->set_body(body.str());
+  }
+
+  // On the I/O thread: sends the newest frame to every client that is keeping up.
+  void flush() {
+    Message frame;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      frame = std::move(latest);
+      latest.reset();
+      flushPosted = false;
+    }
+    if (!frame) return;
+    std::uint64_t sent = 0, dropped = 0;
+    for (const Handle& h : clients) {
+      websocketpp::lib::error_code ec;
+      auto con = server.get_con_from_hdl(h, ec);
+      if (ec || con->get_state() != websocketpp::session::state::open) continue;
+      if (con->get_buffered_amount() > options.maxQueuedBytesPerClient) {
+        ++dropped;
+        continue;
+      }
+      con->send(*frame, websocketpp::frame::opcode::text);
+      ++sent;
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    stats.framesSent += sent;
+    stats.framesDropped += dropped;
+  }
+
+  void broadcastWelcome() {
+    std::vector<Message> hello;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      hello = welcome;
+    }
+    for (const Handle& h : clients) {
+      for (const Message& m : hello) sendTo(h, *m);
+    }
+  }
+};
+
+ViewerServer::ViewerServer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+std::unique_ptr<ViewerServer> ViewerServer::start(const ServerOptions& options,
+                                                  std::string* error) {
+  auto impl = std::make_unique<Impl>();
+  Impl* p = impl.get();
+  p->options = options;
+  p->page = !options.webRoot.empty() && std::filesystem::exists(options.webRoot / "index.html");
+  WsServer& s = p->server;
+  s.clear_access_channels(websocketpp::log::alevel::all);
+  s.clear_error_channels(websocketpp::log::elevel::all);
+  websocketpp::lib::error_code ec;
+  s.init_asio(ec);
+  if (ec) {
+    if (error) *error = "cannot start the network loop: " + ec.message();
+    return nullptr;
+  }
+  s.set_reuse_addr(true);
+  s.set_max_message_size(options.maxClientMessageBytes);
+  s.set_open_handler([p](Handle h) { p->onOpen(h); });
+  s.set_close_handler([p](Handle h) { p->onClose(h); });
+  s.set_message_handler([p](Handle h, WsServer::message_ptr m) { p->onMessage(h, m); });
+  s.set_http_handler([p](Handle h) { p->onHttp(h); });
+  // A small kernel send buffer keeps a slow client's backlog in our queue, where it is
+  // counted and frames are skipped, instead of megabytes of stale frames in the kernel.
+  s.set_socket_init_handler([p](Handle, asio::ip::tcp::socket& socket) {
+    asio::error_code ignored;
+    socket.set_option(asio::ip::tcp::no_delay(true), ignored);
+    socket.set_option(asio::socket_base::send_buffer_size(static_cast<int>(std::min<std::size_t>(
+                          p->options.maxQueuedBytesPerClient, std::size_t{256} << 10))),
+                      ignored);
+  });
+
+  asio::error_code aec;
+  const auto address = asio::ip::make_address(options.host, aec);
+  if (aec) {
+    if (error) *error = "--host: not an IP address: " + options.host;
+    return nullptr;
+  }
+  s.listen(asio::ip::tcp::endpoint(address, static_cast<unsigned short>(options.port)), ec);
+  if (!ec) s.start_accept(ec);
+  if (ec) {
+    if (error) {
+      *error = "cannot listen on " + options.host + ":" + std::to_string(options.port) + ": " +
+               ec.message();
+    }
+    return nullptr;
+  }
+  p->boundPort = s.get_local_endpoint(ec).port();
+  p->ioThread = std::thread([p] { p->server.run(); });
+  return std::unique_ptr<ViewerServer>(new ViewerServer(std::move(impl)));
+}
+
+ViewerServer::~ViewerServer() {
+  Impl* p = impl_.get();
+  asio::post(p->server.get_io_service(), [p] {
+    websocketpp::lib::error_code ec;
+    p->server.stop_listening(ec);
+    for (const Handle& h : p->clients) {
+      p->server.close(h, websocketpp::close::status::going_away, "server stopping", ec);
+    }
+  });
+  // Give clients a moment to answer the close handshake, then stop regardless.
+  for (int i = 0; i < 50 && p->clientCount > 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  p->server.stop();
+  if (p->ioThread.joinable()) p->ioThread.join();
+}
+
+int ViewerServer::port() const {
+  return impl_->boundPort;
+}
+bool ViewerServer::pageAvailable() const {
+  return impl_->page;
+}
+bool ViewerServer::hasClients() const {
+  return impl_->clientCount > 0;
+}
+
+void ViewerServer::setWelcome(std::vector<std::string> messages) {
+  Impl* p = impl_.get();
+  {
+    std::lock_guard<std::mutex> lock(p->mutex);
+    p->welcome.clear();
+    for (std::string& m : messages) {
+      p->welcome.push_back(std::make_shared<const std::string>(std::move(m)));
+    }
+  }
+  asio::post(p->server.get_io_service(), [p] { p->broadcastWelcome(); });
+}
+
+void ViewerServer::publish(std::string message) {
+  Impl* p = impl_.get();
+  std::lock_guard<std::mutex> lock(p->mutex);
+  ++p->stats.framesPublished;
+  if (p->clientCount == 0) return;
+  p->latest = std::make_shared<const std::string>(std::move(message));
+  if (!p->flushPosted) {
+    p->flushPosted = true;
+    asio::post(p->server.get_io_service(), [p] { p->flush(); });
+  }
+}
+
+std::vector<ClientCommand> ViewerServer::takeCommands() {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return std::exchange(impl_->commands, {});
+}
+
+ServerStats ViewerServer::stats() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->stats;
+}
+
+}  // namespace dynahand::viewer

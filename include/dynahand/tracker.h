@@ -56,6 +56,14 @@ struct TrackerSettings {
   bool keepCandidates = true;    // report every simulation's pose (for pictures)
 };
 
+// How well the fitted hand explains the data (beyond the paper's metric):
+struct FitQuality {
+  float dataNearModel = 0.0f;  // share of the hand's sample points within 10 mm of the model
+  float modelOnHand = 0.0f;    // share of the camera-facing model surface (by area, forearm
+                               // excluded) that projects onto segmented pixels
+  int fingertipsOffHand = 0;   // fingertip keypoints projecting outside the segmentation
+};
+
 // One simulation's outcome this frame.
 struct Candidate {
   StrategyKind kind = StrategyKind::Normal;
@@ -74,6 +82,7 @@ struct HandResult {
   float fitError = 0.0f;         // sum errFit, m
   float occlusionError = 0.0f;   // sum errOcc, m
   std::vector<float> bodyError;  // (17) errFit_i + errOcc_i, m
+  FitQuality quality;            // of the reported pose (valid when tracked)
   StrategyKind simulation = StrategyKind::Normal;
   bool acquired = false;  // this frame (re)acquired the hand from scratch
   int pointCount = 0;     // sample points used

@@ -88,6 +88,14 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
     fmt::format_to(std::back_inserter(s), ",\"simulation\":\"{}\",\"acquired\":{},\"points\":{}",
                    track::strategyName(hand.simulation), hand.acquired ? "true" : "false",
                    hand.pointCount);
+    if (hand.tracked) {
+      s += ",\"fit\":{\"data_near_model\":";
+      appendNumber(s, hand.quality.dataNearModel);
+      s += ",\"model_on_hand\":";
+      appendNumber(s, hand.quality.modelOnHand);
+      fmt::format_to(std::back_inserter(s), ",\"fingertips_off_hand\":{}}}",
+                     hand.quality.fingertipsOffHand);
+    }
     if (o.candidates) {
       s += ",\"candidates\":[";
       bool first = true;

@@ -1,6 +1,9 @@
 #include "track/hand_tracker.h"
 
+#include "track/fit_quality.h"
+
 #include <algorithm>
+#include <array>
 #include <limits>
 
 namespace dynahand::track {
@@ -94,6 +97,15 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     runStrategies(frame, out);
   }
   fillResult(out);
+  if (out.tracked && frame.cloud != nullptr) {
+    simulator_.pose(rig_, posed_);
+    std::array<Vec3, 5> tips;
+    for (std::size_t f = 0; f < 5; ++f) tips[f] = out.keypoints21[4 + 4 * f];
+    out.quality =
+        measureFitQuality(posed_, frame.points, *frame.cloud, rig_.anatomy().forearm, tips);
+  } else {
+    out.quality = FitQuality{};
+  }
 }
 
 void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {

@@ -1,0 +1,21 @@
+// How well a fitted hand explains the depth data, in numbers a person can check (beyond
+// the paper's error metric, which is a maximum per body): the share of the hand's samples
+// lying on the model surface, and the share of the model's visible surface lying on the
+// segmented hand.
+#pragma once
+
+#include <span>
+
+#include "dynahand/cloud.h"
+#include "dynahand/tracker.h"
+#include "track/posed_bodies.h"
+
+namespace dynahand::track {
+
+// bodies: the fitted model; points: the hand's sample points; skipBody: a body left out of
+// the model-side share (the forearm, cut by segmentation), -1 for none; tips: the five
+// fingertip keypoints.
+FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const Vec3> points,
+                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips);
+
+}  // namespace dynahand::track

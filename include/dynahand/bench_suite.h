@@ -46,8 +46,10 @@ struct SuiteItemResult {
   SuiteItem item;
   SequenceKeypoints keypoints;  // ground truth and prediction per frame
   KeypointMetrics metrics;
-  std::vector<double> frameMs;  // tracker wall time per frame (one thread), ms
-  int framesToAcquire = -1;     // first frame with max joint error <= 30 mm; -1: never
+  std::vector<double> frameMs;     // tracker wall time per frame (one thread), ms
+  std::vector<double> frameCpuMs;  // CPU time of that thread in track(), ms: on a loaded
+                                   // machine wall time grows, CPU time much less
+  int framesToAcquire = -1;        // first frame with max joint error <= 30 mm; -1: never
 };
 
 // Synthesises and tracks one item on the calling thread.
@@ -67,7 +69,8 @@ struct SuiteRow {
   int items = 0, frames = 0;
   double meanMm = 0, p95Mm = 0;
   double success30 = 0;  // fraction of frames with max joint error <= 30 mm
-  double p50Ms = 0, p99Ms = 0, framesPerSecond = 0;
+  double p50Ms = 0, p99Ms = 0, framesPerSecond = 0;  // wall time
+  double p50CpuMs = 0;
   int autoItems = 0;               // items with automatic acquisition
   double meanFramesToAcquire = 0;  // over auto items that acquired
   int maxFramesToAcquire = -1;

@@ -14,7 +14,7 @@ foreach(row "tof / medium / gt" "structured-light / medium / auto" "ablation: al
     message(FATAL_ERROR "the table has no row '${row}'")
   endif()
 endforeach()
-# label, items, frames, mean mm, p95 mm, <=30mm %, ..., p50 ms, p99 ms, frames/s
+# label, items, frames, mean mm, p95 mm, <=30mm %, acquire, p50 ms, p99 ms, CPU p50 ms, frames/s
 if(NOT out MATCHES "tof / medium / gt +([0-9]+) +([0-9]+) +([0-9.]+) +([0-9.]+) +([0-9.]+)% +- +([0-9.]+) +([0-9.]+) +([0-9.]+)")
   message(FATAL_ERROR "cannot read the tof / medium / gt row")
 endif()

@@ -1,14 +1,14 @@
 # dynahand_precompile(target DEPS...): precompiled headers for the heavy third-party headers
 # a target uses (Eigen always; nlohmann/json, fmt, spdlog, CLI11, GoogleTest, Google
 # Benchmark and OpenCV core when the target links them). Each target builds its own PCH once,
-# then every source file of the target starts from it: a cold build of the command takes
-# about half the CPU time (docs/performance.md, "Build time"). Project headers are never
-# precompiled (they change).
+# then every source file of the target starts from it. Project headers are never precompiled.
+# Off by default: measured on a cold -O3 build of the command it costs more than it saves
+# (code generation, not parsing, dominates; docs/performance.md, "Build time").
 #
 # With ccache as compiler launcher, ccache needs sloppiness pch_defines,time_macros to cache
 # files built with a PCH (otherwise it passes them through uncached), and GCC needs
 # -fpch-preprocess; both are set here when DYNAHAND_PCH is on.
-option(DYNAHAND_PCH "Precompile third-party headers per target (faster cold builds)" ON)
+option(DYNAHAND_PCH "Precompile third-party headers per target" OFF)
 
 if(DYNAHAND_PCH AND CMAKE_CXX_COMPILER_LAUNCHER MATCHES "ccache" AND
    NOT CMAKE_CXX_COMPILER_LAUNCHER MATCHES "CCACHE_SLOPPINESS")

@@ -2,6 +2,8 @@
 // `dynahand render`.
 #include <fmt/format.h>
 
+#include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <unordered_map>
 

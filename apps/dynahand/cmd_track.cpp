@@ -2,9 +2,11 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 
+#include "dynahand/camera.h"
 #include "dynahand/command.h"
 #include "dynahand/metrics.h"
 #include "dynahand/model_pose.h"
@@ -24,14 +26,61 @@ struct TrackOptions {
   std::vector<std::string> disable;
 };
 
-int runTrack(const TrackOptions& o) {
-  if (o.input.rfind("camera:", 0) == 0) {
-    throw UsageError("live cameras: record with 'dynahand record' first, then track the recording");
+// camera:N opens the N-th camera DepthCamera::list() finds; camera:BACKEND[:ID] a given one.
+std::unique_ptr<DepthCamera> openCamera(const std::string& input) {
+  const std::string what = input.substr(std::string("camera:").size());
+  std::string spec = what;
+  const bool isIndex = !what.empty() && std::all_of(what.begin(), what.end(),
+                                                    [](char c) { return c >= '0' && c <= '9'; });
+  std::string backends;
+  for (const auto& b : cameraBackends()) backends += (backends.empty() ? "" : ", ") + b;
+  if (backends.empty()) backends = "none compiled in";
+  if (isIndex) {
+    const CameraScan scan = DepthCamera::list();
+    const std::size_t index = std::stoul(what);
+    if (index >= scan.cameras.size()) {
+      std::string problems;
+      for (const auto& p : scan.problems) problems += "; " + p;
+      throw std::runtime_error(input + ": " + std::to_string(scan.cameras.size()) +
+                               " depth camera(s) found (tried back ends: " + backends + problems +
+                               ")");
+    }
+    spec = scan.cameras[index].spec();
   }
-  if (!std::filesystem::exists(o.input)) throw UsageError("input not found: " + o.input);
-  auto reader = SequenceReader::open(o.input);
-  if (!reader) throw UsageError(reader.message());
-  const SequenceInfo& info = reader->info();
+  auto camera = DepthCamera::open(spec);
+  if (!camera) {
+    throw std::runtime_error(input + ": " + camera.message() + " (tried back ends: " + backends +
+                             ")");
+  }
+  return std::move(*camera);
+}
+
+// Where frames come from: a recording (random access, maybe ground truth) or a live camera.
+struct FrameInput {
+  std::optional<SequenceReader> reader;
+  std::unique_ptr<DepthCamera> camera;
+  SequenceInfo info;
+  DepthFrame live;
+};
+
+int runTrack(const TrackOptions& o) {
+  FrameInput in;
+  if (o.input.rfind("camera:", 0) == 0) {
+    if (o.init == "gt") throw UsageError("--init gt: a live camera has no ground truth");
+    in.camera = openCamera(o.input);
+    in.info.intrinsics = in.camera->intrinsics();
+    in.info.framesPerSecond = 30.0f;
+    in.info.frameCount = std::numeric_limits<int>::max();  // until Ctrl-C
+    std::printf("tracking %s (%s) live; Ctrl-C stops\n", in.camera->info().name.c_str(),
+                in.camera->info().spec().c_str());
+  } else {
+    if (!std::filesystem::exists(o.input)) throw UsageError("input not found: " + o.input);
+    auto reader = SequenceReader::open(o.input);
+    if (!reader) throw UsageError(reader.message());
+    in.reader.emplace(std::move(*reader));
+    in.info = in.reader->info();
+  }
+  const SequenceInfo& info = in.info;
 
   std::optional<model::ArticulatedModel> hand;
   if (!o.modelFile.empty()) {
@@ -61,7 +110,7 @@ int runTrack(const TrackOptions& o) {
   const int first = std::clamp(o.start, 0, info.frameCount);
   const int last = o.frames < 0 ? info.frameCount : std::min(info.frameCount, first + o.frames);
   if (o.init == "gt") {
-    const auto gt = reader->groundTruth(first);
+    const auto gt = in.reader->groundTruth(first);
     if (!gt)
       throw UsageError("--init gt: " + o.input + " has no ground truth for frame " +
                        std::to_string(first));
@@ -78,6 +127,7 @@ int runTrack(const TrackOptions& o) {
 
   io::JsonOptions json;
   json.candidates = o.candidates;
+  json.candidatePoses = o.candidates;
   std::unique_ptr<io::TrackWriter> writer, csv;
   if (!o.out.empty()) {
     auto w = io::TrackWriter::create(o.out, *hand, json);
@@ -93,7 +143,7 @@ int runTrack(const TrackOptions& o) {
   if (!o.bvh.empty()) bvh.emplace(*hand, info.framesPerSecond);
 
   installInterruptHandler();
-  Progress progress("track", last - first);
+  Progress progress("track", in.camera ? 0 : last - first);
   std::vector<double> times;
   eval::SequenceKeypoints accuracy;
   accuracy.fps = info.framesPerSecond;
@@ -101,9 +151,18 @@ int runTrack(const TrackOptions& o) {
   int done = 0;
   model::ModelPose lastPose;
   for (int f = first; f < last && !interrupted(); ++f) {
-    auto frame = reader->frame(f);
-    if (!frame) throw std::runtime_error(frame.message());
-    const track::TrackResult& r = (*tracker)->track(*frame);
+    const DepthFrame* depth = nullptr;
+    Result<DepthFrame> recorded = Error{""};
+    if (in.camera) {
+      const Status s = in.camera->grab(in.live);
+      if (!s) throw std::runtime_error(o.input + ": " + s.message());
+      depth = &in.live;
+    } else {
+      recorded = in.reader->frame(f);
+      if (!recorded) throw std::runtime_error(recorded.message());
+      depth = &*recorded;
+    }
+    const track::TrackResult& r = (*tracker)->track(*depth);
     times.push_back(r.timeMs);
     const auto& h = r.hands.front();
     trackedFrames += h.tracked ? 1 : 0;
@@ -120,7 +179,7 @@ int runTrack(const TrackOptions& o) {
       if (!lastPose.bodies.empty()) bvh->add(lastPose);
     }
     if (info.hasGroundTruth) {
-      accuracy.groundTruth.push_back(reader->groundTruth(f));
+      accuracy.groundTruth.push_back(in.reader->groundTruth(f));
       accuracy.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
                                              : std::nullopt);
     }
@@ -163,9 +222,11 @@ const CommandRegistration kRegistration{Command{
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<TrackOptions>();
       sub.add_option("input", o->input,
-                     "sequence folder (canonical layout), .rs/.json recording, PNG folder or .oni")
+                     "sequence folder (canonical layout), .rs/.json recording, PNG folder, .oni, "
+                     "or camera:N (the N-th camera 'dynahand cameras' lists, live until Ctrl-C)")
           ->required();
-      sub.add_option("-o,--out", o->out, "poses as JSON lines (.jsonl) or CSV (.csv)");
+      sub.add_option("-o,--out", o->out,
+                     "poses as JSON lines (.jsonl), CSV (.csv) or the original authors' .pose");
       sub.add_option("--csv", o->csv, "also write the 21 keypoints as CSV");
       sub.add_option("--bvh", o->bvh, "also write a BVH skeleton animation");
       sub.add_option("--model", o->modelFile, "hand model file (default: the built-in hand)");
@@ -186,7 +247,7 @@ const CommandRegistration kRegistration{Command{
       sub.add_flag("--per-frame", o->perFrame,
                    "acquire every frame afresh (frames far apart in time)");
       sub.add_flag("--candidates", o->candidates,
-                   "write every simulation's error into the JSON lines");
+                   "write every simulation's error and pose into the JSON lines (for render)");
       sub.add_option("--disable", o->disable,
                      "simulations to switch off: normal, gross_motion, grasp_bias, finger_flip, "
                      "feature_detection");
@@ -194,6 +255,8 @@ const CommandRegistration kRegistration{Command{
           "Examples:\n"
           "  dynahand track clip/ --out poses.jsonl\n"
           "  dynahand track clip/ --init gt --out poses.jsonl --bvh hand.bvh\n"
+          "  dynahand track clip/ --out hand.pose\n"
+          "  dynahand track camera:0 --out live.jsonl\n"
           "  dynahand track ../shared/data/sr305-hands/20210326-230536 --per-frame --out "
           "fits.jsonl");
       return [o] { return runTrack(*o); };

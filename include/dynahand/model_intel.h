@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "dynahand/model_pose.h"
@@ -37,6 +38,8 @@ Status saveIntelPoses(const std::filesystem::path& path, const ArticulatedModel&
 Result<ModelPose> intelPoseFromNumbers(std::span<const float> numbers,
                                        const ArticulatedModel& model);
 std::vector<float> intelPoseToNumbers(const ModelPose& pose, const ArticulatedModel& model);
+// One .pose line (no newline), as saveIntelPoses writes it; for writers that stream frames.
+std::string intelPoseLine(const ModelPose& pose, const ArticulatedModel& model);
 
 // Catmull-Clark subdivision of a closed polygon mesh (used on the control cages); returns the
 // subdivided vertices and quad faces.

@@ -38,6 +38,27 @@ void drawSkeleton(RgbImage& image, const Intrinsics& camera, const std::array<Ve
 // Every body's hull edges projected through the camera, blended with `opacity` in [0, 1].
 void drawModel(RgbImage& image, const Intrinsics& camera, const model::ArticulatedModel& model,
                const model::ModelPose& pose, Rgb colour, float opacity = 1.0f);
+// A pinhole view of the scene other than the depth camera's own: its intrinsics and the
+// transform from the depth camera's frame into the view's camera frame.
+struct View {
+  Intrinsics intrinsics;
+  Pose fromCamera;  // identity: the depth camera itself
+};
+// The depth camera's view rotated by `angleRad` about the image's vertical axis through
+// `target` (m, camera frame), at the same distance: pi/2 looks at the target from the
+// side. The target keeps its pixel position.
+View orbitView(const Intrinsics& camera, const Vec3& target, float angleRad);
+// The depth frame's points seen from `view`: nearer points drawn over farther ones, shaded
+// by their depth in the view between nearM and farM; points farther than `radiusM` from
+// `target` are left out (<= 0 keeps all). An image of the view's size, black background.
+RgbImage shadePointsFromView(const DepthFrame& depth, const Intrinsics& camera, const View& view,
+                             float nearM, float farM, const Vec3& target, float radiusM);
+// Every body as a filled convex polygon lit from the viewer (faces turned away are skipped;
+// bodies drawn far to near) with its silhouette outlined, blended with `opacity`.
+void drawShadedModel(RgbImage& image, const View& view, const model::ArticulatedModel& model,
+                     const model::ModelPose& pose, Rgb colour, float opacity = 1.0f);
+// Images of equal height side by side.
+RgbImage besideEachOther(const std::vector<RgbImage>& images);
 // Text in the top-left corner (or at row `line`).
 void drawLabel(RgbImage& image, const std::string& text, int line = 0,
                Rgb colour = {255, 255, 255});

@@ -1,8 +1,10 @@
 // Tracker output formats (docs/formats.md, "Tracked poses"): JSON lines, CSV of the
-// 21 keypoints, and BVH skeleton animation. Metres and unit quaternions (w, x, y, z)
-// in JSON; metres in CSV; centimetres and degrees in BVH (what animation tools expect).
+// 21 keypoints, the original authors' .pose, and BVH skeleton animation. Metres and unit
+// quaternions (w, x, y, z) in JSON; metres in CSV; centimetres and degrees in BVH (what animation
+// tools expect).
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -32,8 +34,10 @@ std::string trackResultToJson(const track::TrackResult& result,
 // Streams frames to a file as they come, so an interrupted run keeps what it wrote.
 class TrackWriter {
  public:
-  enum class Format { JsonLines, Csv };
-  // The format follows the extension unless given: .jsonl/.json -> JSON lines, .csv -> CSV.
+  enum class Format { JsonLines, Csv, IntelPose };
+  // The format follows the extension: .jsonl/.json/.ndjson -> JSON lines, .csv -> CSV,
+  // .pose -> the original authors' format (model_intel.h) of the first hand, one line per
+  // frame; frames where it is lost repeat the nearest tracked pose (earlier, else later).
   static Result<std::unique_ptr<TrackWriter>> create(const std::filesystem::path& path,
                                                      const model::ArticulatedModel& model,
                                                      const JsonOptions& options = {});
@@ -48,7 +52,35 @@ class TrackWriter {
   JsonOptions options_;
   Format format_ = Format::JsonLines;
   std::ofstream out_;
+  model::ModelPose lastTracked_;  // .pose: repeated while the hand is lost
+  int pendingLines_ = 0;          // .pose: frames before the first tracked one
 };
+
+// One hand of one frame read back from the JSON lines.
+struct TrackedCandidate {
+  std::string simulation;  // strategyName()
+  float error = 0.0f;      // m
+  model::ModelPose pose;   // empty unless written with candidate poses
+};
+struct TrackedHand {
+  model::Side side = model::Side::Right;
+  bool tracked = false;
+  model::ModelPose pose;  // body poses (empty when not tracked or written without bodies)
+  std::array<Vec3, 21> keypoints21{};
+  float error = 0.0f;
+  std::string simulation;
+  std::vector<TrackedCandidate> candidates;
+};
+struct TrackedFrame {
+  int frame = 0;
+  double timeMs = 0.0;
+  std::vector<TrackedHand> hands;
+};
+
+// Reads `dynahand track` JSON lines. Bodies are matched to `model` by name (candidates'
+// bodies by order); errors name the file, line and problem.
+Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& path,
+                                                 const model::ArticulatedModel& model);
 
 // BVH: a HIERARCHY from the model's bodies (root = the model's root with 6 channels,
 // every other body 3 rotation channels, ZXY order) and a MOTION block of every frame

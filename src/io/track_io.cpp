@@ -1,5 +1,7 @@
 #include "dynahand/track_io.h"
 
+#include "dynahand/model_intel.h"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -140,8 +142,11 @@ Result<std::unique_ptr<TrackWriter>> TrackWriter::create(const std::filesystem::
     w->format_ = Format::Csv;
   } else if (ext == ".jsonl" || ext == ".json" || ext == ".ndjson") {
     w->format_ = Format::JsonLines;
+  } else if (ext == ".pose") {
+    w->format_ = Format::IntelPose;
   } else {
-    return Error{path.string() + ": unknown output format '" + ext + "' (use .jsonl or .csv)"};
+    return Error{path.string() + ": unknown output format '" + ext +
+                 "' (use .jsonl, .csv or .pose)"};
   }
   if (path.has_parent_path()) {
     std::error_code ec;
@@ -161,6 +166,18 @@ Result<std::unique_ptr<TrackWriter>> TrackWriter::create(const std::filesystem::
 Status TrackWriter::write(const track::TrackResult& r) {
   if (format_ == Format::JsonLines) {
     out_ << trackResultToJson(r, *model_, options_) << '\n';
+  } else if (format_ == Format::IntelPose) {
+    // The format has no frame numbers, so every frame gets a line: lost frames repeat
+    // the last tracked pose, and frames before the first tracked one wait for it.
+    const track::HandResult* hand = r.hands.empty() ? nullptr : &r.hands.front();
+    if (hand != nullptr && hand->tracked) lastTracked_ = hand->pose;
+    if (lastTracked_.bodies.empty()) {
+      ++pendingLines_;
+      return Ok{};
+    }
+    const std::string line = model::intelPoseLine(lastTracked_, *model_);
+    for (; pendingLines_ >= 0; --pendingLines_) out_ << line << '\n';
+    pendingLines_ = 0;
   } else {
     for (const auto& hand : r.hands) {
       std::string row =

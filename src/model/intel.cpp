@@ -290,6 +290,19 @@ Result<std::vector<ModelPose>> loadIntelPoses(const std::filesystem::path& path,
   return poses;
 }
 
+std::string intelPoseLine(const ModelPose& pose, const ArticulatedModel& model) {
+  const std::vector<float> numbers = intelPoseToNumbers(pose, model);
+  std::string line;
+  for (size_t i = 0; i < numbers.size(); ++i) {
+    char buf[32];
+    const float v = numbers[i] == 0.0f ? 0.0f : numbers[i];
+    const auto result = std::to_chars(buf, buf + sizeof buf, v);
+    // Their layout: bodies separated by three spaces, position and orientation by two.
+    line += std::string(buf, result.ptr) + (i % 7 == 6 ? "   " : i % 7 == 2 ? "  " : " ");
+  }
+  return line;
+}
+
 Status saveIntelPoses(const std::filesystem::path& path, const ArticulatedModel& model,
                       std::span<const ModelPose> poses) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -299,16 +312,7 @@ Status saveIntelPoses(const std::filesystem::path& path, const ArticulatedModel&
       return Error{fmt::format("{}: a pose has {} bodies, the model {}", path.string(),
                                pose.bodies.size(), model.bodies().size())};
     }
-    const std::vector<float> numbers = intelPoseToNumbers(pose, model);
-    std::string line;
-    for (size_t i = 0; i < numbers.size(); ++i) {
-      char buf[32];
-      const float v = numbers[i] == 0.0f ? 0.0f : numbers[i];
-      const auto result = std::to_chars(buf, buf + sizeof buf, v);
-      // Their layout: bodies separated by three spaces, position and orientation by two.
-      line += std::string(buf, result.ptr) + (i % 7 == 6 ? "   " : i % 7 == 2 ? "  " : " ");
-    }
-    out << line << "\n";
+    out << intelPoseLine(pose, model) << "\n";
   }
   out.close();
   if (!out) return Error{fmt::format("{}: write failed", path.string())};

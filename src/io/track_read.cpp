@@ -1,0 +1,111 @@
+// Reading `dynahand track` JSON lines back (docs/formats/tracked-poses.md), e.g. for
+// `dynahand render`.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <unordered_map>
+
+#include "dynahand/track_io.h"
+
+namespace dynahand::io {
+
+namespace {
+
+using nlohmann::json;
+
+Vec3 readVec(const json& j) {
+  if (!j.is_array() || j.size() != 3) throw std::runtime_error("expected [x, y, z]");
+  return {j[0].get<float>(), j[1].get<float>(), j[2].get<float>()};
+}
+Quat readQuat(const json& j) {
+  if (!j.is_array() || j.size() != 4) throw std::runtime_error("expected [w, x, y, z]");
+  Quat q(j[0].get<float>(), j[1].get<float>(), j[2].get<float>(), j[3].get<float>());
+  if (std::abs(q.norm() - 1.0f) > 1e-3f) throw std::runtime_error("not a unit quaternion");
+  return q.normalized();
+}
+float readNumber(const json& j) {
+  return j.is_number() ? j.get<float>() : std::numeric_limits<float>::quiet_NaN();
+}
+
+TrackedHand readHand(const json& h, const model::ArticulatedModel& model,
+                     const std::unordered_map<std::string, std::size_t>& bodyIndex) {
+  TrackedHand hand;
+  hand.side =
+      h.value("side", std::string("right")) == "left" ? model::Side::Left : model::Side::Right;
+  hand.tracked = h.value("tracked", false);
+  hand.error = h.contains("error") ? readNumber(h["error"]) : 0.0f;
+  hand.simulation = h.value("simulation", std::string());
+  if (hand.tracked) {
+    const json& k = h.at("keypoints21");
+    if (!k.is_array() || k.size() != 21) throw std::runtime_error("keypoints21: expected 21");
+    for (std::size_t i = 0; i < 21; ++i) hand.keypoints21[i] = readVec(k[i]);
+    if (h.contains("bodies")) {
+      hand.pose.bodies.assign(model.bodies().size(), Pose{});
+      std::vector<bool> seen(model.bodies().size(), false);
+      for (const json& b : h["bodies"]) {
+        const auto it = bodyIndex.find(b.at("name").get<std::string>());
+        if (it == bodyIndex.end()) {
+          throw std::runtime_error("bodies: '" + b.at("name").get<std::string>() +
+                                   "' is not a body of the model");
+        }
+        hand.pose.bodies[it->second] = Pose{readVec(b.at("p")), readQuat(b.at("q"))};
+        seen[it->second] = true;
+      }
+      for (std::size_t i = 0; i < seen.size(); ++i) {
+        if (!seen[i]) throw std::runtime_error("bodies: no pose for " + model.bodies()[i].name);
+      }
+    }
+  }
+  if (h.contains("candidates")) {
+    for (const json& c : h["candidates"]) {
+      TrackedCandidate candidate;
+      candidate.simulation = c.at("simulation").get<std::string>();
+      candidate.error = readNumber(c.at("error"));
+      if (c.contains("bodies")) {
+        const json& bodies = c["bodies"];
+        if (bodies.size() != model.bodies().size()) {
+          throw std::runtime_error(fmt::format("candidates: {} bodies, the model has {}",
+                                               bodies.size(), model.bodies().size()));
+        }
+        for (const json& b : bodies) {
+          candidate.pose.bodies.push_back(Pose{readVec(b.at("p")), readQuat(b.at("q"))});
+        }
+      }
+      hand.candidates.push_back(std::move(candidate));
+    }
+  }
+  return hand;
+}
+
+}  // namespace
+
+Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& path,
+                                                 const model::ArticulatedModel& model) {
+  std::ifstream in(path);
+  if (!in) return Error{path.string() + ": cannot open"};
+  std::unordered_map<std::string, std::size_t> bodyIndex;
+  for (std::size_t b = 0; b < model.bodies().size(); ++b) bodyIndex[model.bodies()[b].name] = b;
+  std::vector<TrackedFrame> frames;
+  std::string line;
+  int lineNumber = 0;
+  while (std::getline(in, line)) {
+    ++lineNumber;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    try {
+      const json j = json::parse(line);
+      TrackedFrame frame;
+      frame.frame = j.at("frame").get<int>();
+      frame.timeMs = j.value("time_ms", 0.0);
+      for (const json& h : j.at("hands")) frame.hands.push_back(readHand(h, model, bodyIndex));
+      frames.push_back(std::move(frame));
+    } catch (const std::exception& e) {
+      return Error{fmt::format("{}:{}: {}", path.string(), lineNumber, e.what())};
+    }
+  }
+  if (frames.empty()) return Error{path.string() + ": no frames"};
+  return frames;
+}
+
+}  // namespace dynahand::io

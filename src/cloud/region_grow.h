@@ -86,8 +86,10 @@ class RegionGrower {
   }
 
   // Grows from `seed` across neighbours within the step rule and radiusM of the seed's
-  // point. Cells stay unlabelled until accept() or reject().
-  GrownRegion grow(int seed, const DepthStepRule& rule, float radiusM);
+  // point, and across larger steps within one hand's depth (surfaces occluding or
+  // occluded by the region) while they are smaller than minAreaM2 or the region is.
+  // Cells stay unlabelled until accept() or reject().
+  GrownRegion grow(int seed, const DepthStepRule& rule, float radiusM, float minAreaM2);
   // Labels the last grown region kRegion1/kRegion2 and its cut cells kCut1/kCut2.
   void accept(CellLabel region);
   // Labels the last grown region kTried (its seed is not tried again).
@@ -103,14 +105,22 @@ class RegionGrower {
   Intrinsics k_;
   std::vector<std::uint8_t> labels_;   // (cells) CellLabel
   std::vector<std::uint8_t> visited_;  // (cells) attempt that reached the cell, 0 = none
+  // (cells) attempt that found the cell on a large surface behind its region, 0 = none
+  std::vector<std::uint8_t> separate_;
+  std::vector<std::uint8_t> acrossQueued_;  // (cells) attempt that queued it in across_
   // Packed cells (j << 16 | i): the region from the front, its cut cells from the back.
   std::vector<std::int32_t> queue_;
-  std::vector<float> columnX_;  // (width) (u - cx) / fx of each column
-  std::vector<float> rowY_;     // (height) (v - cy) / fy of each row
+  std::vector<std::int32_t> across_;           // packed cells across a depth step, to try
+  std::vector<std::uint8_t> acrossFarBehind_;  // (across_) farther than kMaxOccluderStepM
+  std::vector<float> columnX_;                 // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;                    // (height) (v - cy) / fy of each row
   std::size_t cellOf(std::int32_t packed) const {
     return static_cast<std::size_t>(packed >> 16) * static_cast<std::size_t>(grid_.width) +
            static_cast<std::size_t>(packed & 0xffff);
   }
+  // Packed nearest cell within radius (squared) of centre that is kFree and not visited
+  // by attempt `stamp`, or -1.
+  std::int32_t nearestUnvisitedInBall(const Vec3& centre, float radius2, std::uint8_t stamp) const;
   std::uint8_t attempt_ = 0;  // grows per grow() call, reset with the grid
   int regionEnd_ = 0;         // queue_[0, regionEnd_) = region of the last grow
   int cutBegin_ = 0;          // queue_[cutBegin_, cells) = its cut cells

@@ -203,7 +203,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       const int seed = coarseGrower.nearestFreeCell(depthLimit);
       if (seed < 0) break;
       const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
-      if (r.areaM2 < seg.minAreaM2) {
+      if (r.areaM2 < seg.minAreaM2 || r.inFrontOfSurface) {
         coarseGrower.reject();
         continue;
       }
@@ -232,7 +232,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
             first.nearestPoint.z() + seg.secondRegionDepthBandM, &first.nearestPoint, coarseRadius);
         if (seed < 0) break;
         const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
-        if (r.areaM2 >= seg.minAreaM2 && !r.touchesEarlierRegion) {
+        if (r.areaM2 >= seg.minAreaM2 && !r.inFrontOfSurface && !r.touchesEarlierRegion) {
           coarseGrower.accept(cloud::kRegion2);
           regionCount = 2;
           minI = std::min(minI, r.minI);
@@ -332,7 +332,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
           });
           if (seed < 0) break;
           const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
-          if (g.areaM2 >= seg.minAreaM2) {
+          if (g.areaM2 >= seg.minAreaM2 && !g.inFrontOfSurface) {
             fineGrower.accept(static_cast<CellLabel>(label));
             fineRegion[r] = g;
             fineFound[r] = true;

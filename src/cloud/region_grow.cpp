@@ -19,7 +19,7 @@ void RegionGrower::reserve(std::size_t cells, int maxWidth, int maxHeight) {
   acrossQueued_.reserve(cells);
   queue_.reserve(cells);
   across_.reserve(cells);
-  acrossFarBehind_.reserve(cells);
+  acrossSide_.reserve(cells);
 }
 
 void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
@@ -34,7 +34,7 @@ void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
   attempt_ = 0;
   queue_.resize(cells);
   across_.resize(cells);
-  acrossFarBehind_.resize(cells);
+  acrossSide_.resize(cells);
   // Normalised image coordinates of each grid column / row: x = columnX[i] * z.
   columnX_.resize(static_cast<std::size_t>(grid.width));
   rowY_.resize(static_cast<std::size_t>(grid.height));
@@ -73,33 +73,13 @@ int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
   return best;
 }
 
-std::int32_t RegionGrower::nearestUnvisitedInBall(const Vec3& centre, float radius2,
-                                                  std::uint8_t stamp) const {
-  std::int32_t best = -1;
-  float bestZ = std::numeric_limits<float>::infinity();
-  for (int j = 0; j < grid_.height; ++j) {
-    const std::size_t row = static_cast<std::size_t>(j) * grid_.width;
-    const float* depth = grid_.depth + row;
-    for (int i = 0; i < grid_.width; ++i) {
-      const float z = depth[i];
-      if (z == 0.0f || z >= bestZ || labels_[row + i] != kFree || visited_[row + i] == stamp) {
-        continue;
-      }
-      const Vec3 p(columnX_[static_cast<std::size_t>(i)] * z,
-                   rowY_[static_cast<std::size_t>(j)] * z, z);
-      if ((p - centre).squaredNorm() > radius2) continue;
-      bestZ = z;
-      best = (j << 16) | i;
-    }
-  }
-  return best;
-}
-
 namespace {
 // Largest depth step between two surfaces of one hand (m): a fist's fingers stand up to
 // about this far in front of the palm, and fingers pointing at the camera this far in
 // front of each other.
 constexpr float kMaxOccluderStepM = 0.06f;
+// Where a surface across a depth step lies relative to the region cell beside it.
+enum AcrossSide : std::uint8_t { kInFront = 0, kBehind = 1, kFarBehind = 2 };
 }  // namespace
 
 GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radiusM,
@@ -164,7 +144,7 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   // occluder) within its ball, with whether they lie farther than kMaxOccluderStepM
   // behind. Tried once the region's own surface is complete (see below).
   std::int32_t* across = across_.data();
-  std::uint8_t* acrossFarBehind = acrossFarBehind_.data();
+  std::uint8_t* acrossSide = acrossSide_.data();
   int acrossHead = 0;
   int acrossTail = 0;
   // While a surface behind the region is tried: the state to return to, and whether it
@@ -172,6 +152,10 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   bool trying = false;
   bool joinsSeparate = false;
   float partLimitZ2 = 0.0f;
+  std::uint8_t trySide = kInFront;
+  bool fragmentsChecked = false;
+  bool fromFragments = false;     // the seed's surface alone is smaller than minAreaM2
+  bool inFrontOfSurface = false;  // see below: not a volume of its own
   Sums before;
   int tailBefore = 0;
   int cutTopBefore = 0;
@@ -218,7 +202,9 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
             const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
             if ((q - nearest).squaredNorm() <= radius2) {
               acrossQueued[n] = stamp;
-              acrossFarBehind[acrossTail] = zn - z > kMaxOccluderStepM;
+              acrossSide[acrossTail] = zn < z                        ? kInFront
+                                       : zn - z <= kMaxOccluderStepM ? kBehind
+                                                                     : kFarBehind;
               across[acrossTail++] = (nj << 16) | ni;
             }
           }
@@ -248,9 +234,21 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
       if (j + 1 < h) visit(c + w, i, j + 1, limitY);
       if (trying && (joinsSeparate || sums.areaZ2 - before.areaZ2 > partLimitZ2)) break;
     }
+    if (!trying && !fragmentsChecked) {
+      // The seed's own surface is complete.
+      fragmentsChecked = true;
+      fromFragments = sums.areaZ2 < minAreaZ2;
+    }
     if (trying) {
       trying = false;
-      if (joinsSeparate || sums.areaZ2 - before.areaZ2 > partLimitZ2) {
+      const float partZ2 = sums.areaZ2 - before.areaZ2;
+      // Fragments in front of a surface close behind them (not a fragment itself) are
+      // pieces of that surface broken up by holes or steep sides (a fingertip in front of
+      // the palm, the torso's edge): not a volume of their own.
+      if (fromFragments && trySide == kBehind && (joinsSeparate || partZ2 >= minAreaZ2)) {
+        inFrontOfSurface = true;
+      }
+      if (inFrontOfSurface || joinsSeparate || partZ2 > partLimitZ2) {
         // Too large to be part of the hand: a surface of its own. Its cells stay visited and
         // are marked separate, so the rest of that surface is recognised from any side.
         for (int q = tailBefore; q < tail; ++q) separate[cellOf(queue[q])] = stamp;
@@ -261,36 +259,45 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
         cutTop = cutTopBefore;
         acrossTail = acrossTailBefore;
       }
+      if (inFrontOfSurface) break;
     }
-    // The next surface. A region smaller than a hand cannot be one on its own: it is part
-    // of the nearest volume, and takes the next nearest surface within its ball, adjacent
-    // or not (fingers pointing at the camera, whose steep sides the sensor lost, are
-    // islands in front of each other and of the palm). Once large enough it only takes
-    // small surfaces adjacent to it across a depth step: in front of it (more fingers),
-    // or behind it within kMaxOccluderStepM (curled fingers), never a large one behind.
-    const bool handSized = sums.areaZ2 >= minAreaZ2;
+    // The next surface across a depth step from the region, within its ball. A region
+    // smaller than minAreaM2 is not a hand yet: it collects the fragments (surfaces smaller
+    // than minAreaM2) beside it at any step, e.g. fingers pointing at the camera, each a few
+    // cm in front of the next. Once large enough it takes fragments in front of it (more
+    // fingers) and surfaces behind it within kMaxOccluderStepM (the palm behind curled
+    // fingers) unless larger than a hand and forearm can be inside the ball (a wall, a
+    // table, the torso).
     std::int32_t next = -1;
-    if (!handSized) {
-      next = nearestUnvisitedInBall(nearest, radius2, stamp);
+    if (sums.areaZ2 < minAreaZ2) {
+      while (acrossHead < acrossTail) {
+        const int index = acrossHead++;
+        const std::int32_t packed = across[index];
+        if (visited[cellOf(packed)] == stamp) continue;
+        next = packed;
+        partLimitZ2 = minAreaZ2;
+        trySide = acrossSide[index];
+        break;
+      }
     } else {
       while (acrossHead < acrossTail) {
         const int index = acrossHead++;
         const std::int32_t packed = across[index];
-        if (visited[cellOf(packed)] == stamp || acrossFarBehind[index]) continue;
+        const std::uint8_t side = acrossSide[index];
+        if (visited[cellOf(packed)] == stamp || side == kFarBehind) continue;
         next = packed;
+        partLimitZ2 = side == kInFront ? minAreaZ2 : maxPartAreaZ2;
+        trySide = side;
         break;
       }
     }
     if (next < 0) break;
-    {
-      partLimitZ2 = maxPartAreaZ2;
-      trying = true;
-      joinsSeparate = false;
-      before = sums;
-      tailBefore = tail;
-      cutTopBefore = cutTop;
-      acrossTailBefore = acrossTail;
-    }
+    trying = true;
+    joinsSeparate = false;
+    before = sums;
+    tailBefore = tail;
+    cutTopBefore = cutTop;
+    acrossTailBefore = acrossTail;
     visited[cellOf(next)] = stamp;
     queue[tail++] = next;
   }
@@ -302,6 +309,7 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   r.cellCount = tail;
   r.areaM2 = sums.areaZ2 * areaPerZ2;
   r.touchesEarlierRegion = sums.touches;
+  r.inFrontOfSurface = inFrontOfSurface;
   r.nearestPoint = nearest;
   r.pointSum = sums.pointSum;
   r.pixelSum = Vec2(ou * static_cast<float>(tail) + step * sums.iSum,

@@ -43,6 +43,9 @@ struct GrownRegion {
   int cellCount = 0;
   float areaM2 = 0.0f;  // sum of z^2 step^2 / (fx fy)
   bool touchesEarlierRegion = false;
+  // Built from fragments (surfaces smaller than minAreaM2) that lie in front of a larger
+  // surface close behind them: they are pieces of it, not a volume; reject the region.
+  bool inFrontOfSurface = false;
   Vec3 nearestPoint = Vec3::Zero();  // the seed's point, m
   Vec3 pointSum = Vec3::Zero();      // m
   Vec2 pixelSum = Vec2::Zero();      // pixels (u, v)
@@ -110,17 +113,14 @@ class RegionGrower {
   std::vector<std::uint8_t> acrossQueued_;  // (cells) attempt that queued it in across_
   // Packed cells (j << 16 | i): the region from the front, its cut cells from the back.
   std::vector<std::int32_t> queue_;
-  std::vector<std::int32_t> across_;           // packed cells across a depth step, to try
-  std::vector<std::uint8_t> acrossFarBehind_;  // (across_) farther than kMaxOccluderStepM
-  std::vector<float> columnX_;                 // (width) (u - cx) / fx of each column
-  std::vector<float> rowY_;                    // (height) (v - cy) / fy of each row
+  std::vector<std::int32_t> across_;      // packed cells across a depth step, to try
+  std::vector<std::uint8_t> acrossSide_;  // (across_) in front, behind or far behind
+  std::vector<float> columnX_;            // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;               // (height) (v - cy) / fy of each row
   std::size_t cellOf(std::int32_t packed) const {
     return static_cast<std::size_t>(packed >> 16) * static_cast<std::size_t>(grid_.width) +
            static_cast<std::size_t>(packed & 0xffff);
   }
-  // Packed nearest cell within radius (squared) of centre that is kFree and not visited
-  // by attempt `stamp`, or -1.
-  std::int32_t nearestUnvisitedInBall(const Vec3& centre, float radius2, std::uint8_t stamp) const;
   std::uint8_t attempt_ = 0;  // grows per grow() call, reset with the grid
   int regionEnd_ = 0;         // queue_[0, regionEnd_) = region of the last grow
   int cutBegin_ = 0;          // queue_[cutBegin_, cells) = its cut cells

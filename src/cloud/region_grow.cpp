@@ -117,8 +117,8 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   const float seedZ = depth[seed];
   const Vec3 nearest(columnX[seedI] * seedZ, rowY[seedJ] * seedZ, seedZ);
 
-  // Accumulators in locals (registers), written to the result once at the end. A
-  // Snapshot of them is taken before a surface behind the region is tried, to undo it.
+  // Accumulators in locals (registers), written to the result once at the end. A copy
+  // is kept while a surface across a depth step is tried, to undo it.
   struct Sums {
     Vec3 pointSum = Vec3::Zero();
     float iSum = 0.0f;
@@ -141,14 +141,14 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   int tail = 0;
   int cutTop = static_cast<int>(queue_.size());
   // Cells across a depth step from the region (too large for the step rule, not an
-  // occluder) within its ball, with whether they lie farther than kMaxOccluderStepM
-  // behind. Tried once the region's own surface is complete (see below).
+  // occluder) within its ball, and on which side they lie. Tried once the region's own
+  // surface is complete (see below).
   std::int32_t* across = across_.data();
   std::uint8_t* acrossSide = acrossSide_.data();
   int acrossHead = 0;
   int acrossTail = 0;
-  // While a surface behind the region is tried: the state to return to, and whether it
-  // turned out to be part of a surface already found separate.
+  // While a surface across a step is tried: its side and area limit, the state to return
+  // to, and whether it turned out to be part of a surface already found separate.
   bool trying = false;
   bool joinsSeparate = false;
   float partLimitZ2 = 0.0f;

@@ -88,10 +88,12 @@ class RegionGrower {
     return best;
   }
 
-  // Grows from `seed` across neighbours within the step rule and radiusM of the seed's
-  // point, and across larger steps within one hand's depth (surfaces occluding or
-  // occluded by the region) while they are smaller than minAreaM2 or the region is.
-  // Cells stay unlabelled until accept() or reject().
+  // Grows from `seed` across neighbours within the step rule (or up to 6 cm nearer) and
+  // radiusM of the seed's point, then across larger depth steps: fragments (surfaces
+  // below minAreaM2) at any step while the region is below minAreaM2; afterwards
+  // fragments in front and surfaces up to 6 cm behind that are no larger than half the
+  // ball's cross-section (docs/cloud.md, "Regions across depth steps"). Cells stay
+  // unlabelled until accept() or reject().
   GrownRegion grow(int seed, const DepthStepRule& rule, float radiusM, float minAreaM2);
   // Labels the last grown region kRegion1/kRegion2 and its cut cells kCut1/kCut2.
   void accept(CellLabel region);

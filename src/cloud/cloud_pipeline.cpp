@@ -202,8 +202,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
       const int seed = coarseGrower.nearestFreeCell(depthLimit);
       if (seed < 0) break;
-      const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
-      if (r.areaM2 < seg.minAreaM2) {
+      const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
+      if (r.areaM2 < seg.minAreaM2 || r.inFrontOfSurface) {
         coarseGrower.reject();
         continue;
       }
@@ -219,7 +219,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
     }
     if (regionCount == 0 && borderSeed >= 0) {
       coarseGrower.reset(coarse, k);  // forget the passed-over labels
-      first = coarseGrower.grow(borderSeed, seg.step, coarseRadius);
+      first = coarseGrower.grow(borderSeed, seg.step, coarseRadius, seg.minAreaM2);
       coarseGrower.accept(cloud::kRegion1);
       regionCount = 1;
     }
@@ -231,8 +231,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
         const int seed = coarseGrower.nearestFreeCell(
             first.nearestPoint.z() + seg.secondRegionDepthBandM, &first.nearestPoint, coarseRadius);
         if (seed < 0) break;
-        const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius);
-        if (r.areaM2 >= seg.minAreaM2 && !r.touchesEarlierRegion) {
+        const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
+        if (r.areaM2 >= seg.minAreaM2 && !r.inFrontOfSurface && !r.touchesEarlierRegion) {
           coarseGrower.accept(cloud::kRegion2);
           regionCount = 2;
           minI = std::min(minI, r.minI);
@@ -331,8 +331,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
                                             : coarseLabel == cloud::kRegion2;
           });
           if (seed < 0) break;
-          const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM);
-          if (g.areaM2 >= seg.minAreaM2) {
+          const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
+          if (g.areaM2 >= seg.minAreaM2 && !g.inFrontOfSurface) {
             fineGrower.accept(static_cast<CellLabel>(label));
             fineRegion[r] = g;
             fineFound[r] = true;

@@ -4,6 +4,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "cloud/depth_filter.h"
 
@@ -14,7 +15,11 @@ void RegionGrower::reserve(std::size_t cells, int maxWidth, int maxHeight) {
   rowY_.reserve(static_cast<std::size_t>(maxHeight));
   labels_.reserve(cells);
   visited_.reserve(cells);
+  separate_.reserve(cells);
+  acrossQueued_.reserve(cells);
   queue_.reserve(cells);
+  across_.reserve(cells);
+  acrossSide_.reserve(cells);
 }
 
 void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
@@ -24,8 +29,12 @@ void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
   labels_.assign(cells, kFree);
   // One byte per cell (cache-friendly); cleared per grid and when the 255 stamps run out.
   visited_.assign(cells, 0);
+  separate_.assign(cells, 0);
+  acrossQueued_.assign(cells, 0);
   attempt_ = 0;
   queue_.resize(cells);
+  across_.resize(cells);
+  acrossSide_.resize(cells);
   // Normalised image coordinates of each grid column / row: x = columnX[i] * z.
   columnX_.resize(static_cast<std::size_t>(grid.width));
   rowY_.resize(static_cast<std::size_t>(grid.height));
@@ -65,17 +74,23 @@ int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
 }
 
 namespace {
-// Largest depth step toward the camera still taken as part of the same hand (m): a
-// fist's fingers stand up to about this far in front of the palm.
+// Largest depth step between two surfaces of one hand (m): a fist's fingers stand up to
+// about this far in front of the palm, and fingers pointing at the camera this far in
+// front of each other.
 constexpr float kMaxOccluderStepM = 0.06f;
+// Where a surface across a depth step lies relative to the region cell beside it.
+enum AcrossSide : std::uint8_t { kInFront = 0, kBehind = 1, kFarBehind = 2 };
 }  // namespace
 
-GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radiusM) {
+GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radiusM,
+                               float minAreaM2) {
   assert(seed >= 0 && static_cast<std::size_t>(seed) < labels_.size());
   const int w = grid_.width;
   const int h = grid_.height;
   const float* depth = grid_.depth;
   std::uint8_t* visited = visited_.data();
+  std::uint8_t* separate = separate_.data();
+  std::uint8_t* acrossQueued = acrossQueued_.data();
   const std::uint8_t* labels = labels_.data();
   const float* columnX = columnX_.data();
   const float* rowY = rowY_.data();
@@ -83,11 +98,17 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   const float spacingX = step / k_.fx;  // lateral m per m of depth between neighbours
   const float spacingY = step / k_.fy;
   const float areaPerZ2 = spacingX * spacingY;
+  const float minAreaZ2 = minAreaM2 / areaPerZ2;  // minAreaM2 as a sum of z^2
+  // A surface across a depth step covering more than half the ball's cross-section is
+  // larger than a hand and forearm inside the ball: a wall, a table or the torso.
+  const float maxPartAreaZ2 = 0.5f * std::numbers::pi_v<float> * radiusM * radiusM / areaPerZ2;
   const float radius2 = radiusM * radiusM;
 
   ++attempt_;
   if (attempt_ == 0) {  // stamp wrap-around: wipe once
     std::fill(visited_.begin(), visited_.end(), std::uint8_t{0});
+    std::fill(separate_.begin(), separate_.end(), std::uint8_t{0});
+    std::fill(acrossQueued_.begin(), acrossQueued_.end(), std::uint8_t{0});
     attempt_ = 1;
   }
   const std::uint8_t stamp = attempt_;
@@ -96,73 +117,189 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   const float seedZ = depth[seed];
   const Vec3 nearest(columnX[seedI] * seedZ, rowY[seedJ] * seedZ, seedZ);
 
-  // Accumulators in locals (registers), written to the result once at the end.
-  Vec3 pointSum = Vec3::Zero();
-  float iSum = 0.0f;
-  float jSum = 0.0f;
-  float areaZ2 = 0.0f;
-  int minI = seedI, maxI = seedI, minJ = seedJ, maxJ = seedJ;
-  int cutCount = 0;
-  Vec3 cutPointSum = Vec3::Zero();
-  float cutISum = 0.0f;
-  float cutJSum = 0.0f;
-  bool touches = false;
+  // Accumulators in locals (registers), written to the result once at the end. A copy
+  // is kept while a surface across a depth step is tried, to undo it.
+  struct Sums {
+    Vec3 pointSum = Vec3::Zero();
+    float iSum = 0.0f;
+    float jSum = 0.0f;
+    float areaZ2 = 0.0f;
+    int minI = 0, maxI = 0, minJ = 0, maxJ = 0;
+    int cutCount = 0;
+    Vec3 cutPointSum = Vec3::Zero();
+    float cutISum = 0.0f;
+    float cutJSum = 0.0f;
+    bool touches = false;
+  };
+  Sums sums;
+  sums.minI = sums.maxI = seedI;
+  sums.minJ = sums.maxJ = seedJ;
 
   // The queue holds packed cell coordinates (j << 16 | i): no division per cell.
   std::int32_t* queue = queue_.data();
   int head = 0;
   int tail = 0;
   int cutTop = static_cast<int>(queue_.size());
+  // Cells across a depth step from the region (too large for the step rule, not an
+  // occluder) within its ball, and on which side they lie. Tried once the region's own
+  // surface is complete (see below).
+  std::int32_t* across = across_.data();
+  std::uint8_t* acrossSide = acrossSide_.data();
+  int acrossHead = 0;
+  int acrossTail = 0;
+  // While a surface across a step is tried: its side and area limit, the state to return
+  // to, and whether it turned out to be part of a surface already found separate.
+  bool trying = false;
+  bool joinsSeparate = false;
+  float partLimitZ2 = 0.0f;
+  std::uint8_t trySide = kInFront;
+  bool fragmentsChecked = false;
+  bool fromFragments = false;     // the seed's surface alone is smaller than minAreaM2
+  bool inFrontOfSurface = false;  // see below: not a volume of its own
+  Sums before;
+  int tailBefore = 0;
+  int cutTopBefore = 0;
+  int acrossTailBefore = 0;
+
   visited[seed] = stamp;
   queue[tail++] = (seedJ << 16) | seedI;
-  while (head < tail) {
-    const std::int32_t packed = queue[head++];
-    const int i = packed & 0xffff;
-    const int j = packed >> 16;
-    const int c = j * w + i;
-    const float z = depth[c];
-    pointSum += Vec3(columnX[i] * z, rowY[j] * z, z);
-    iSum += static_cast<float>(i);
-    jSum += static_cast<float>(j);
-    areaZ2 += z * z;
-    minI = std::min(minI, i);
-    maxI = std::max(maxI, i);
-    minJ = std::min(minJ, j);
-    maxJ = std::max(maxJ, j);
-    const float limitX = maxDepthStep(rule, z, spacingX);
-    const float limitY = maxDepthStep(rule, z, spacingY);
-    const auto visit = [&](int n, int ni, int nj, float limit) {
-      if (visited[n] == stamp) return;
-      const float zn = depth[n];
-      if (zn == 0.0f) return;
-      // A surface in front of this one, close behind it in depth, occludes it: a finger
-      // curled in front of the palm or a thumb across it. It belongs to the same volume
-      // even across a depth step (the step rule only stops steps away from the camera),
-      // and even if it was passed over before as too small on its own.
-      const bool occluder = zn < z && z - zn <= kMaxOccluderStepM;
-      if (!occluder && std::fabs(zn - z) > limit) return;
-      const std::uint8_t label = labels[n];
-      if (label != kFree && !(label == kTried && occluder)) {
-        // Connected to an accepted region or its cut: this is not a separate volume.
-        touches |= label != kTried;
-        return;
+  for (;;) {
+    while (head < tail) {
+      const std::int32_t packed = queue[head++];
+      const int i = packed & 0xffff;
+      const int j = packed >> 16;
+      const int c = j * w + i;
+      const float z = depth[c];
+      sums.pointSum += Vec3(columnX[i] * z, rowY[j] * z, z);
+      sums.iSum += static_cast<float>(i);
+      sums.jSum += static_cast<float>(j);
+      sums.areaZ2 += z * z;
+      sums.minI = std::min(sums.minI, i);
+      sums.maxI = std::max(sums.maxI, i);
+      sums.minJ = std::min(sums.minJ, j);
+      sums.maxJ = std::max(sums.maxJ, j);
+      const float limitX = maxDepthStep(rule, z, spacingX);
+      const float limitY = maxDepthStep(rule, z, spacingY);
+      const auto visit = [&](int n, int ni, int nj, float limit) {
+        if (visited[n] == stamp) {
+          // A surface being tried that continues into one found separate is part of it.
+          if (trying && separate[n] == stamp && std::fabs(depth[n] - z) <= limit) {
+            joinsSeparate = true;
+          }
+          return;
+        }
+        const float zn = depth[n];
+        if (zn == 0.0f) return;
+        // A surface in front of this one, close behind it in depth, occludes it: a finger
+        // curled in front of the palm or a thumb across it. It belongs to the same volume
+        // even across a depth step (the step rule only stops steps away from the camera),
+        // and even if it was passed over before as too small on its own.
+        const bool occluder = zn < z && z - zn <= kMaxOccluderStepM;
+        if (!occluder && std::fabs(zn - z) > limit) {
+          // Another surface across a depth step; within the hand's ball it may still be part
+          // of the same volume. Decided once the region's own surfaces are complete.
+          if (acrossQueued[n] != stamp && (labels[n] == kFree || (labels[n] == kTried && zn < z))) {
+            const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
+            if ((q - nearest).squaredNorm() <= radius2) {
+              acrossQueued[n] = stamp;
+              acrossSide[acrossTail] = zn < z                        ? kInFront
+                                       : zn - z <= kMaxOccluderStepM ? kBehind
+                                                                     : kFarBehind;
+              across[acrossTail++] = (nj << 16) | ni;
+            }
+          }
+          return;
+        }
+        const std::uint8_t label = labels[n];
+        if (label != kFree && !(label == kTried && occluder)) {
+          // Connected to an accepted region or its cut: this is not a separate volume.
+          sums.touches |= label != kTried;
+          return;
+        }
+        visited[n] = stamp;
+        const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
+        if ((q - nearest).squaredNorm() <= radius2) {
+          queue[tail++] = (nj << 16) | ni;
+        } else {
+          queue[--cutTop] = (nj << 16) | ni;
+          ++sums.cutCount;
+          sums.cutPointSum += q;
+          sums.cutISum += static_cast<float>(ni);
+          sums.cutJSum += static_cast<float>(nj);
+        }
+      };
+      if (i > 0) visit(c - 1, i - 1, j, limitX);
+      if (i + 1 < w) visit(c + 1, i + 1, j, limitX);
+      if (j > 0) visit(c - w, i, j - 1, limitY);
+      if (j + 1 < h) visit(c + w, i, j + 1, limitY);
+      if (trying && (joinsSeparate || sums.areaZ2 - before.areaZ2 > partLimitZ2)) break;
+    }
+    if (!trying && !fragmentsChecked) {
+      // The seed's own surface is complete.
+      fragmentsChecked = true;
+      fromFragments = sums.areaZ2 < minAreaZ2;
+    }
+    if (trying) {
+      trying = false;
+      const float partZ2 = sums.areaZ2 - before.areaZ2;
+      // Fragments in front of a surface close behind them (not a fragment itself) are
+      // pieces of that surface broken up by holes or steep sides (a fingertip in front of
+      // the palm, the torso's edge): not a volume of their own.
+      if (fromFragments && trySide == kBehind && (joinsSeparate || partZ2 >= minAreaZ2)) {
+        inFrontOfSurface = true;
       }
-      visited[n] = stamp;
-      const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
-      if ((q - nearest).squaredNorm() <= radius2) {
-        queue[tail++] = (nj << 16) | ni;
-      } else {
-        queue[--cutTop] = (nj << 16) | ni;
-        ++cutCount;
-        cutPointSum += q;
-        cutISum += static_cast<float>(ni);
-        cutJSum += static_cast<float>(nj);
+      if (inFrontOfSurface || joinsSeparate || partZ2 > partLimitZ2) {
+        // Too large to be part of the hand: a surface of its own. Its cells stay visited and
+        // are marked separate, so the rest of that surface is recognised from any side.
+        for (int q = tailBefore; q < tail; ++q) separate[cellOf(queue[q])] = stamp;
+        for (int q = cutTop; q < cutTopBefore; ++q) visited[cellOf(queue[q])] = 0;
+        for (int q = acrossTailBefore; q < acrossTail; ++q) acrossQueued[cellOf(across[q])] = 0;
+        sums = before;
+        head = tail = tailBefore;
+        cutTop = cutTopBefore;
+        acrossTail = acrossTailBefore;
       }
-    };
-    if (i > 0) visit(c - 1, i - 1, j, limitX);
-    if (i + 1 < w) visit(c + 1, i + 1, j, limitX);
-    if (j > 0) visit(c - w, i, j - 1, limitY);
-    if (j + 1 < h) visit(c + w, i, j + 1, limitY);
+      if (inFrontOfSurface) break;
+    }
+    // The next surface across a depth step from the region, within its ball. A region
+    // smaller than minAreaM2 is not a hand yet: it collects the fragments (surfaces smaller
+    // than minAreaM2) beside it at any step, e.g. fingers pointing at the camera, each a few
+    // cm in front of the next. Once large enough it takes fragments in front of it (more
+    // fingers) and surfaces behind it within kMaxOccluderStepM (the palm behind curled
+    // fingers) unless larger than a hand and forearm can be inside the ball (a wall, a
+    // table, the torso).
+    std::int32_t next = -1;
+    if (sums.areaZ2 < minAreaZ2) {
+      while (acrossHead < acrossTail) {
+        const int index = acrossHead++;
+        const std::int32_t packed = across[index];
+        if (visited[cellOf(packed)] == stamp) continue;
+        next = packed;
+        partLimitZ2 = minAreaZ2;
+        trySide = acrossSide[index];
+        break;
+      }
+    } else {
+      while (acrossHead < acrossTail) {
+        const int index = acrossHead++;
+        const std::int32_t packed = across[index];
+        const std::uint8_t side = acrossSide[index];
+        if (visited[cellOf(packed)] == stamp || side == kFarBehind) continue;
+        next = packed;
+        partLimitZ2 = side == kInFront ? minAreaZ2 : maxPartAreaZ2;
+        trySide = side;
+        break;
+      }
+    }
+    if (next < 0) break;
+    trying = true;
+    joinsSeparate = false;
+    before = sums;
+    tailBefore = tail;
+    cutTopBefore = cutTop;
+    acrossTailBefore = acrossTail;
+    visited[cellOf(next)] = stamp;
+    queue[tail++] = next;
   }
 
   // Cell sums to pixel sums: u = originU + i * step.
@@ -170,20 +307,21 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   const auto ov = static_cast<float>(grid_.originV);
   GrownRegion r;
   r.cellCount = tail;
-  r.areaM2 = areaZ2 * areaPerZ2;
-  r.touchesEarlierRegion = touches;
+  r.areaM2 = sums.areaZ2 * areaPerZ2;
+  r.touchesEarlierRegion = sums.touches;
+  r.inFrontOfSurface = inFrontOfSurface;
   r.nearestPoint = nearest;
-  r.pointSum = pointSum;
-  r.pixelSum = Vec2(ou * static_cast<float>(tail) + step * iSum,
-                    ov * static_cast<float>(tail) + step * jSum);
-  r.cutCount = cutCount;
-  r.cutPointSum = cutPointSum;
-  r.cutPixelSum = Vec2(ou * static_cast<float>(cutCount) + step * cutISum,
-                       ov * static_cast<float>(cutCount) + step * cutJSum);
-  r.minI = minI;
-  r.maxI = maxI;
-  r.minJ = minJ;
-  r.maxJ = maxJ;
+  r.pointSum = sums.pointSum;
+  r.pixelSum = Vec2(ou * static_cast<float>(tail) + step * sums.iSum,
+                    ov * static_cast<float>(tail) + step * sums.jSum);
+  r.cutCount = sums.cutCount;
+  r.cutPointSum = sums.cutPointSum;
+  r.cutPixelSum = Vec2(ou * static_cast<float>(sums.cutCount) + step * sums.cutISum,
+                       ov * static_cast<float>(sums.cutCount) + step * sums.cutJSum);
+  r.minI = sums.minI;
+  r.maxI = sums.maxI;
+  r.minJ = sums.minJ;
+  r.maxJ = sums.maxJ;
   regionEnd_ = tail;
   cutBegin_ = cutTop;
   return r;

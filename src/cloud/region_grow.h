@@ -43,6 +43,9 @@ struct GrownRegion {
   int cellCount = 0;
   float areaM2 = 0.0f;  // sum of z^2 step^2 / (fx fy)
   bool touchesEarlierRegion = false;
+  // Built from fragments (surfaces smaller than minAreaM2) that lie in front of a larger
+  // surface close behind them: they are pieces of it, not a volume; reject the region.
+  bool inFrontOfSurface = false;
   Vec3 nearestPoint = Vec3::Zero();  // the seed's point, m
   Vec3 pointSum = Vec3::Zero();      // m
   Vec2 pixelSum = Vec2::Zero();      // pixels (u, v)
@@ -85,9 +88,13 @@ class RegionGrower {
     return best;
   }
 
-  // Grows from `seed` across neighbours within the step rule and radiusM of the seed's
-  // point. Cells stay unlabelled until accept() or reject().
-  GrownRegion grow(int seed, const DepthStepRule& rule, float radiusM);
+  // Grows from `seed` across neighbours within the step rule (or up to 6 cm nearer) and
+  // radiusM of the seed's point, then across larger depth steps: fragments (surfaces
+  // below minAreaM2) at any step while the region is below minAreaM2; afterwards
+  // fragments in front and surfaces up to 6 cm behind that are no larger than half the
+  // ball's cross-section (docs/cloud.md, "Regions across depth steps"). Cells stay
+  // unlabelled until accept() or reject().
+  GrownRegion grow(int seed, const DepthStepRule& rule, float radiusM, float minAreaM2);
   // Labels the last grown region kRegion1/kRegion2 and its cut cells kCut1/kCut2.
   void accept(CellLabel region);
   // Labels the last grown region kTried (its seed is not tried again).
@@ -103,10 +110,15 @@ class RegionGrower {
   Intrinsics k_;
   std::vector<std::uint8_t> labels_;   // (cells) CellLabel
   std::vector<std::uint8_t> visited_;  // (cells) attempt that reached the cell, 0 = none
+  // (cells) attempt that found the cell on a large surface behind its region, 0 = none
+  std::vector<std::uint8_t> separate_;
+  std::vector<std::uint8_t> acrossQueued_;  // (cells) attempt that queued it in across_
   // Packed cells (j << 16 | i): the region from the front, its cut cells from the back.
   std::vector<std::int32_t> queue_;
-  std::vector<float> columnX_;  // (width) (u - cx) / fx of each column
-  std::vector<float> rowY_;     // (height) (v - cy) / fy of each row
+  std::vector<std::int32_t> across_;      // packed cells across a depth step, to try
+  std::vector<std::uint8_t> acrossSide_;  // (across_) in front, behind or far behind
+  std::vector<float> columnX_;            // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;               // (height) (v - cy) / fy of each row
   std::size_t cellOf(std::int32_t packed) const {
     return static_cast<std::size_t>(packed >> 16) * static_cast<std::size_t>(grid_.width) +
            static_cast<std::size_t>(packed & 0xffff);

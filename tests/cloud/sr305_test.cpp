@@ -2,16 +2,13 @@
 // arm): the segmented cloud must be the hand, hand-sized, on every frame.
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-
-#include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
+#include <string>
 #include <vector>
 
 #include "dynahand/cloud.h"
+#include "dynahand/sequence.h"
 #include "test_support.h"
 
 namespace dynahand {
@@ -29,34 +26,18 @@ struct RealSequence {
   std::vector<RealFrame> frames;
 };
 
-// Reads camera.json and depth/*.png with OpenCV (the canonical reader lives in the
-// sensor module; this test only needs the pixels).
+// Reads one recording through the canonical reader (camera.json + depth/*.png).
 RealSequence readSequence(const fs::path& dir) {
   RealSequence seq;
-  std::ifstream file(dir / "camera.json");
-  const nlohmann::json camera = nlohmann::json::parse(file);
-  seq.k.width = camera.at("width").get<int>();
-  seq.k.height = camera.at("height").get<int>();
-  seq.k.fx = camera.at("fx").get<float>();
-  seq.k.fy = camera.at("fy").get<float>();
-  seq.k.cx = camera.at("cx").get<float>();
-  seq.k.cy = camera.at("cy").get<float>();
-  const float scale = camera.at("depth_scale").get<float>();
-  std::vector<fs::path> pngs;
-  for (const auto& entry : fs::directory_iterator(dir / "depth")) pngs.push_back(entry.path());
-  std::sort(pngs.begin(), pngs.end());
-  for (const fs::path& png : pngs) {
-    const cv::Mat image = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
-    EXPECT_EQ(image.type(), CV_16UC1) << png;
-    EXPECT_EQ(image.cols, seq.k.width) << png;
-    if (image.type() != CV_16UC1 || image.cols != seq.k.width || image.rows != seq.k.height) {
-      continue;
-    }
-    DepthFrame frame(image.cols, image.rows, scale);
-    for (int v = 0; v < image.rows; ++v) {
-      std::copy_n(image.ptr<std::uint16_t>(v), image.cols, frame.depth.begin() + v * image.cols);
-    }
-    seq.frames.push_back({dir.filename().string() + "/" + png.filename().string(), frame});
+  Result<SequenceReader> reader = SequenceReader::open(dir);
+  EXPECT_TRUE(reader.ok()) << dir << ": " << (reader.ok() ? "" : reader.error().message);
+  if (!reader.ok()) return seq;
+  seq.k = reader->info().intrinsics;
+  for (int i = 0; i < reader->frameCount(); ++i) {
+    Result<DepthFrame> frame = reader->frame(i);
+    EXPECT_TRUE(frame.ok()) << dir << " frame " << i;
+    if (!frame.ok()) continue;
+    seq.frames.push_back({dir.filename().string() + "/" + std::to_string(i), std::move(*frame)});
   }
   return seq;
 }
@@ -71,7 +52,9 @@ std::vector<RealSequence> readAll(const fs::path& data) {
 
 TEST(CloudSr305, SegmentedCloudIsTheHandOnEveryFrame) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
-  if (!fs::is_directory(data / "sr305-hands")) GTEST_SKIP() << "sr305-hands not present";
+  if (!fs::is_directory(data / "sr305-hands")) {
+    GTEST_SKIP() << "../shared/data/sr305-hands not present; skipping real-data test";
+  }
   int frames = 0;
   for (const RealSequence& seq : readAll(data)) {
     CloudPipeline pipeline(seq.k);

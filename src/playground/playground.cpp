@@ -111,9 +111,9 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
   physics::WorldSettings ws;
   ws.gravity = scene.gravity;
   ws.friction = scene.friction;
-  ws.iterations = 8;
+  ws.iterations = 12;
   ws.relaxIterations = 2;
-  ws.positionIterations = 2;
+  ws.positionIterations = 4;
   ws.contactInnerIterations = 2;
   // Speculative contacts reach this far (m): more than the palm moves in one step at its
   // speed cap (palmMaxSpeed 0.5 m/s -> 8 mm at 60 Hz), so it does not tunnel. Larger margins
@@ -159,10 +159,12 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
     m.jointTorque[j] =
         jointTorqueFor(hand.bodies()[static_cast<std::size_t>(joint.child)].name, scene.hand);
   }
+  // No self-collision: the tracker already keeps its bones apart, and poses such as a tight
+  // fist touch bone to bone, where contacts would fight the drives and spring the fingers open.
   for (int a = 0; a < hand.bodyCount(); ++a)
     for (int b = a + 1; b < hand.bodyCount(); ++b)
       if (m.handBodies[a] >= 0 && m.handBodies[b] >= 0)
-        m.world.setCollisionEnabled(m.handBodies[a], m.handBodies[b], hand.collides(a, b));
+        m.world.setCollisionEnabled(m.handBodies[a], m.handBodies[b], false);
 
   // Palm pads: ellipsoids whose centres sit just inside the palmar surface (-y), so they
   // stand ~4 mm proud of it and leave the palm's centre slightly hollow.

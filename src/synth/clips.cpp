@@ -120,6 +120,12 @@ Shape cylinderGrasp() {
   setThumb(s, digit(25, 25, 15), 20, 25);
   return s;
 }
+// Open above an object, the thumb kept up beside the palm so it does not sweep the object.
+Shape reachOpen() {
+  Shape s = preGrasp();
+  setThumb(s, digit(-5, 10), 0, 0);
+  return s;
+}
 // Closing around an object under the palm: fingers hooked over its far side, thumb opposed.
 Shape boxGrasp() {
   Shape s;
@@ -193,13 +199,14 @@ std::vector<ClipDefinition> makeClips() {
                  key(2.2f, cylinderGrasp())}}});
   // Playground scenarios (docs/playground.md): offsets along the forearm frame, so with the
   // head-mounted camera y is up and z is forward.
-  c.push_back({{"reach-grasp-lift",
-                "open hand lowering onto an object, closing around it, lifting it 16 cm and "
-                "holding it",
-                4.6f, 1},
-               {{key(0.0f, preGrasp(), Vec3(0, 0.0f, 0)), key(0.7f, preGrasp(), Vec3(0, -0.06f, 0)),
-                 key(1.3f, boxGrasp(), Vec3(0, -0.06f, 0)), key(2.0f, boxGrasp(), Vec3(0, 0.1f, 0)),
-                 key(4.4f, boxGrasp(), Vec3(0, 0.1f, 0))}}});
+  c.push_back(
+      {{"reach-grasp-lift",
+        "open hand lowering onto an object, closing around it, lifting it 16 cm and "
+        "holding it",
+        4.6f, 1},
+       {{key(0.0f, reachOpen(), Vec3(0, 0.0f, 0)), key(0.7f, reachOpen(), Vec3(0, -0.075f, 0)),
+         key(1.3f, boxGrasp(), Vec3(0, -0.075f, 0)), key(2.0f, boxGrasp(), Vec3(0, 0.1f, 0)),
+         key(4.4f, boxGrasp(), Vec3(0, 0.1f, 0))}}});
   c.push_back({{"push-forward", "fist pushing 22 cm forward and staying there", 2.6f, 1},
                {{key(0.0f, fist(), Vec3(0, 0, -0.05f)), key(0.4f, fist(), Vec3(0, 0, -0.05f)),
                  key(1.6f, fist(), Vec3(0, 0, 0.17f)), key(2.4f, fist(), Vec3(0, 0, 0.17f))}}});

@@ -55,7 +55,7 @@ inline ScenarioStats runScenario(Playground& pg, const std::string& clip, int fr
         float e = 0.0f;
         for (std::size_t k = 0; k < 21; ++k)
           e += (r.hands[0].keypoints21[k] - frame.hands[0].keypoints[k]).norm();
-        errorSum += e / 21.0f;
+        errorSum += static_cast<double>(e / 21.0f);
       }
     }
     if (i == 0 && pose) pg.placeHand(*pose);

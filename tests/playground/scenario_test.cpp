@@ -29,7 +29,21 @@ void expectTrackedMostly(const test::ScenarioStats& stats) {
   if (std::getenv("DYNAHAND_PLAYGROUND_TRUTH")) return;
   EXPECT_GE(stats.trackedFrames, stats.frames - 2);
   std::printf("tracked %d/%d frames, mean keypoint error %.1f mm\n", stats.trackedFrames,
-              stats.frames, 1000.0f * stats.meanKeypointErrorM);
+              stats.frames, 1000.0 * static_cast<double>(stats.meanKeypointErrorM));
+}
+
+// Printing helpers (printf takes doubles).
+double cm(float m) {
+  return 100.0 * static_cast<double>(m);
+}
+double mm(float m) {
+  return 1000.0 * static_cast<double>(m);
+}
+double degrees(float rad) {
+  return static_cast<double>(rad / kDeg);
+}
+double seconds(int frames) {
+  return frames / static_cast<double>(kFps);
 }
 
 // Longest run of consecutive frames for which `ok` held.
@@ -54,8 +68,8 @@ TEST(Scenario, GraspLiftAndHoldABox) {
     held.add(lift >= 0.10f);
   });
   expectTrackedMostly(stats);
-  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", 100.0f * highest,
-              static_cast<float>(held.longest) / kFps);
+  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", cm(highest),
+              seconds(held.longest));
   EXPECT_GE(highest, 0.10f);
   EXPECT_GE(held.longest, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
 }
@@ -83,8 +97,7 @@ TEST(Scenario, BarbellPickedUpByTheBarDoesNotSlipSideways) {
   });
   expectTrackedMostly(stats);
   std::printf("bar lifted up to %.1f cm, held for %.2f s, slid %.1f mm along its axis\n",
-              100.0f * highest, static_cast<float>(held.longest) / kFps,
-              1000.0f * (maxAlong - minAlong));
+              cm(highest), seconds(held.longest), mm(maxAlong - minAlong));
   EXPECT_GE(highest, 0.10f);
   EXPECT_GE(held.longest, static_cast<int>(2.0f * kFps));
   EXPECT_LT(maxAlong - minAlong, 0.02f) << "the bar slides less than 2 cm in the hand";
@@ -97,7 +110,7 @@ TEST(Scenario, LeverPushedFromOneEndStopToTheOther) {
   const auto stats = test::runScenario(*pg, "push-forward", 72, [](int, const Playground&) {});
   expectTrackedMostly(stats);
   const float end = *pg->hingeAngle("switch");
-  std::printf("lever from %.1f to %.1f degrees\n", start / kDeg, end / kDeg);
+  std::printf("lever from %.1f to %.1f degrees\n", degrees(start), degrees(end));
   EXPECT_NEAR(start, 35.0f * kDeg, 1.0f * kDeg);
   EXPECT_NEAR(end, -35.0f * kDeg, 2.0f * kDeg);
 }
@@ -111,7 +124,7 @@ TEST(Scenario, DialTurnedAtLeast90Degrees) {
     farthest = std::max(farthest, std::abs(*p.hingeAngle("dial") - start));
   });
   expectTrackedMostly(stats);
-  std::printf("dial turned up to %.1f degrees\n", farthest / kDeg);
+  std::printf("dial turned up to %.1f degrees\n", degrees(farthest));
   EXPECT_GE(farthest, 90.0f * kDeg);
 }
 
@@ -141,7 +154,7 @@ TEST(Scenario, HandStaysOutsideAWallTheTrackedHandGoesThrough) {
   });
   expectTrackedMostly(stats);
   std::printf("tracked hand %.1f cm inside the wall, virtual hand %.2f mm (contacts %.2f mm)\n",
-              100.0f * trackedDepth, 1000.0f * virtualDepth, 1000.0f * contactDepth);
+              cm(trackedDepth), mm(virtualDepth), mm(contactDepth));
   EXPECT_GE(trackedDepth, 0.05f) << "the tracked hand goes through the wall";
   EXPECT_LT(virtualDepth, 0.005f);
   EXPECT_LT(contactDepth, 0.005f);

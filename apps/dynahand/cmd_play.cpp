@@ -179,7 +179,7 @@ const CommandRegistration kRegistration{Command{
           ->check(CLI::Range(0.05f, 0.15f));
       sub.footer(
           "Examples:\n"
-          "  dynahand synth --motion reach-grasp-lift --placement head --frames 130 --out /tmp/g\n"
+          "  dynahand synth --motion reach-grasp-lift --frames 132 --out /tmp/g\n"
           "  dynahand play examples/scenes/grasp.json /tmp/g --init gt --out grasp.jsonl\n"
           "  dynahand play examples/scenes/barbell.json /tmp/g/poses.jsonl --frames-dir /tmp/pics\n"
           "  dynahand play examples/scenes/playground.json take01/ --frames-dir /tmp/pics "

@@ -19,7 +19,6 @@ void BM_GraspSceneStep(benchmark::State& state) {
   synth::SynthOptions o;
   o.clip = "reach-grasp-lift";
   o.frameCount = 60;
-  o.scene.placement = synth::CameraPlacement::HeadMounted;
   auto seq = synth::SyntheticSequence::create(o);
   if (!scene || !seq) {
     state.SkipWithError("grasp scene or clip missing");

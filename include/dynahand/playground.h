@@ -89,9 +89,11 @@ struct SceneSpec {
   std::vector<ObjectSpec> objects;
 };
 
-// A camera pose in the scene (y up) at `position`, looking along -z pitched down by
-// pitch rad: the head-mounted view (synth CameraPlacement::HeadMounted uses 35 degrees).
-Pose cameraLookingDown(const Vec3& position, float pitch);
+// A camera pose in the scene (y up) at `position`, looking along -z pitched down by pitch
+// rad, then turned by yaw rad about the scene's y axis. Pitch 35 degrees is the head-mounted
+// view; pitch -90 (looking up), yaw 180 maps a desk camera's view of a palm (synth
+// CameraPlacement::DeskFacing) to a palm facing the table (docs/playground.md).
+Pose cameraLookingDown(const Vec3& position, float pitch, float yaw = 0.0f);
 
 // Scene files (JSON, docs/formats/scene.md). Errors name the file and the JSON path.
 Result<SceneSpec> loadScene(const std::filesystem::path& path);

@@ -72,6 +72,8 @@ struct Playground::Impl {
 
 namespace {
 
+constexpr float kFingerMass = 0.04f;  // kg, least mass of a finger body (see create)
+
 float jointTorqueFor(const std::string& childName, const HandDriveSettings& h) {
   auto endsWith = [&](const char* suffix) {
     const std::string s(suffix);
@@ -111,10 +113,11 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
   physics::WorldSettings ws;
   ws.gravity = scene.gravity;
   ws.friction = scene.friction;
-  ws.iterations = 12;
+  ws.iterations = 16;
   ws.relaxIterations = 2;
-  ws.positionIterations = 4;
+  ws.positionIterations = 0;
   ws.contactInnerIterations = 2;
+  ws.contactErp = 0.5f;
   // Speculative contacts reach this far (m): more than the palm moves in one step at its
   // speed cap (palmMaxSpeed 0.5 m/s -> 8 mm at 60 Hz), so it does not tunnel. Larger margins
   // (2.5 cm tried) make libccd's MPR pick side faces of the table for small resting objects.
@@ -136,8 +139,13 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
   for (std::size_t b = 0; b < hand.bodies().size(); ++b) {
     if (static_cast<int>(b) == m.forearm) continue;
     const model::Body& body = hand.bodies()[b];
+    // Phalanges of 3-10 g against a 0.3 kg palm make a stiff chain the sweeps cannot settle
+    // when the palm drive pushes a finger into a wall (it sank 5-10 mm); a mass floor
+    // conditions the chain. Their weight is carried (compensateFingerWeight), so it only
+    // adds inertia.
+    const float mass = static_cast<int>(b) == m.palm ? body.mass : std::max(body.mass, kFingerMass);
     m.handBodies[b] =
-        builder.add("hand/" + body.name, body.shape, restPose.bodies[b], body.mass, false, damping);
+        builder.add("hand/" + body.name, body.shape, restPose.bodies[b], mass, false, damping);
   }
   const Quat toPhysics = model::modelToPhysicsFrame();
   m.handJoints.assign(hand.joints().size(), -1);

@@ -25,10 +25,10 @@ ConvexShape hull(const std::vector<Vec3>& points) {
 
 }  // namespace
 
-ConvexShape cylinderShape(float radius, float length) {
+ConvexShape cylinderShape(float radius, float length, int sides) {
   std::vector<Vec3> points;
-  for (int i = 0; i < kRoundSegments; ++i) {
-    const float a = 2.0f * kPi * static_cast<float>(i) / kRoundSegments;
+  for (int i = 0; i < sides; ++i) {
+    const float a = 2.0f * kPi * static_cast<float>(i) / static_cast<float>(sides);
     for (float x : {-0.5f * length, 0.5f * length})
       points.emplace_back(x, radius * std::cos(a), radius * std::sin(a));
   }
@@ -58,7 +58,7 @@ Result<ConvexShape> objectShape(const ObjectSpec& o) {
     case ObjectKind::Sphere:
       return ellipsoidShape(Vec3::Constant(o.radius));
     case ObjectKind::Cylinder:
-      return cylinderShape(o.radius, o.length);
+      return cylinderShape(o.radius, o.length, kRoundSegments);
     case ObjectKind::Convex:
       return ConvexShape::fromPoints(o.points);
     default:
@@ -114,9 +114,11 @@ Status SceneBuilder::addObject(const ObjectSpec& o) {
     }
     case ObjectKind::Barbell: {
       // The caps overlap the bar's ends so the bar passes through them.
-      const physics::BodyId bar = add(o.name + "/bar", cylinderShape(o.radius, o.length),
-                                      {o.position, o.orientation}, 0.5f * o.mass, false);
-      const ConvexShape cap = cylinderShape(o.capRadius, o.capLength);
+      const physics::BodyId bar =
+          add(o.name + "/bar", cylinderShape(o.radius, o.length, kRoundSegments),
+              {o.position, o.orientation}, 0.5f * o.mass, false);
+      // Hexagonal caps (a hex dumbbell): the barbell does not roll away from the fingers.
+      const ConvexShape cap = cylinderShape(o.capRadius, o.capLength, 6);
       std::vector<physics::BodyId> group = {bar};
       for (int side = 0; side < 2; ++side) {
         const float x = (side == 0 ? -1.0f : 1.0f) * 0.5f * (o.length - o.capLength);
@@ -153,7 +155,7 @@ Status SceneBuilder::addObject(const ObjectSpec& o) {
       const Quat rest = (Quat::FromTwoVectors(Vec3::UnitX(), o.axis) * o.orientation).normalized();
       const Quat q = (start * rest).normalized();
       const physics::BodyId knob =
-          add(o.name + "/knob", cylinderShape(o.radius, o.length),
+          add(o.name + "/knob", cylinderShape(o.radius, o.length, kRoundSegments),
               {o.position + (0.5f * o.length) * o.axis, q}, 0.5f * o.mass, false, o.hingeDamping);
       const Vec3 finCentre(0.5f * o.length + 0.5f * o.size.z(), 0, 0);
       const physics::BodyId fin =

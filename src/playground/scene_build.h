@@ -8,8 +8,9 @@
 
 namespace dynahand::playground::detail {
 
-// A cylinder along the body's x axis (16 facets) and an ellipsoid hull, centred on the origin.
-physics::ConvexShape cylinderShape(float radius, float length);
+// A prism with `sides` facets along the body's x axis and an ellipsoid hull, centred on the
+// origin.
+physics::ConvexShape cylinderShape(float radius, float length, int sides);
 physics::ConvexShape ellipsoidShape(const Vec3& semiAxes);
 // The hull of a simple object (box, sphere, cylinder, convex).
 Result<physics::ConvexShape> objectShape(const ObjectSpec& object);

@@ -151,11 +151,13 @@ SceneSpec readScene(const Json& root) {
   if (const Json* v = optional(root, "gravity")) s.gravity = vec3(*v, "gravity");
   {
     const Json& c = objectAt(field(root, "", "camera"), "camera");
-    checkKeys(c, "camera", {"position", "pitchDeg"});
+    checkKeys(c, "camera", {"position", "pitchDeg", "yawDeg"});
     const Vec3 position = vec3(field(c, "camera", "position"), "camera.position");
     const float pitch = number(field(c, "camera", "pitchDeg"), "camera.pitchDeg");
     if (std::abs(pitch) > 90.0f) throw FormatError{"camera.pitchDeg", "must be in [-90, 90]"};
-    s.camera = cameraLookingDown(position, pitch * kDeg);
+    float yaw = 0.0f;
+    if (const Json* v = optional(c, "yawDeg")) yaw = number(*v, "camera.yawDeg");
+    s.camera = cameraLookingDown(position, pitch * kDeg, yaw * kDeg);
   }
   if (const Json* v = optional(root, "stepHz")) s.stepDt = 1.0f / positive(*v, "stepHz");
   readNumber(root, "", "friction", s.friction);
@@ -201,14 +203,14 @@ SceneSpec readScene(const Json& root) {
 
 }  // namespace
 
-Pose cameraLookingDown(const Vec3& position, float pitch) {
+Pose cameraLookingDown(const Vec3& position, float pitch, float yaw) {
   // Camera axes in the scene: x right, y down-ish, z forward-ish; at pitch 0 the camera looks
   // along -z with its y axis along -y (scene up is +y).
   Mat3 axes;
   axes.col(0) = Vec3::UnitX();
   axes.col(1) = Vec3(0.0f, -std::cos(pitch), std::sin(pitch));
   axes.col(2) = Vec3(0.0f, -std::sin(pitch), -std::cos(pitch));
-  return {position, Quat(axes).normalized()};
+  return {position, (Quat(Eigen::AngleAxisf(yaw, Vec3::UnitY())) * Quat(axes)).normalized()};
 }
 
 Result<SceneSpec> parseScene(const std::string& jsonText, const std::string& sourceName) {

@@ -126,11 +126,12 @@ Shape reachOpen() {
   setThumb(s, digit(-5, 10), 0, 0);
   return s;
 }
-// Closing around an object under the palm: fingers hooked over its far side, thumb opposed.
-Shape boxGrasp() {
+// Closing around an object under the palm: a power grasp aiming tighter than the object, so
+// fingers and thumb wrap it as far as it lets them.
+Shape powerGrasp() {
   Shape s;
-  for (int f = 0; f < 4; ++f) setFinger(s, f, 55, 0, 70, 35);
-  setThumb(s, digit(40, 30, 20), 25, 25);
+  for (int f = 0; f < 4; ++f) setFinger(s, f, 70, 0, 100, 60);
+  setThumb(s, digit(45, 20, 15), 35, 35);
   return s;
 }
 // Thumb against the side of the index's middle phalanx (a key grip), for turning a fin.
@@ -205,11 +206,11 @@ std::vector<ClipDefinition> makeClips() {
         "holding it",
         4.6f, 1},
        {{key(0.0f, reachOpen(), Vec3(0, 0.0f, 0)), key(0.7f, reachOpen(), Vec3(0, -0.075f, 0)),
-         key(1.3f, boxGrasp(), Vec3(0, -0.075f, 0)), key(2.0f, boxGrasp(), Vec3(0, 0.1f, 0)),
-         key(4.4f, boxGrasp(), Vec3(0, 0.1f, 0))}}});
-  c.push_back({{"push-forward", "fist pushing 22 cm forward and staying there", 2.6f, 1},
-               {{key(0.0f, fist(), Vec3(0, 0, -0.05f)), key(0.4f, fist(), Vec3(0, 0, -0.05f)),
-                 key(1.6f, fist(), Vec3(0, 0, 0.17f)), key(2.4f, fist(), Vec3(0, 0, 0.17f))}}});
+         key(1.3f, powerGrasp(), Vec3(0, -0.075f, 0)), key(2.0f, powerGrasp(), Vec3(0, 0.1f, 0)),
+         key(4.4f, powerGrasp(), Vec3(0, 0.1f, 0))}}});
+  c.push_back({{"push-forward", "fist pushing 13 cm forward and staying there", 2.6f, 1},
+               {{key(0.0f, fist(), Vec3(0, 0, -0.03f)), key(0.4f, fist(), Vec3(0, 0, -0.03f)),
+                 key(1.6f, fist(), Vec3(0, 0, 0.1f)), key(2.4f, fist(), Vec3(0, 0, 0.1f))}}});
   c.push_back({{"turn-key", "key grip rolling the forearm 110 degrees", 2.6f, 1},
                {{key(0.0f, keyGrip(), Vec3::Zero(), Vec3(0, 0, -55)),
                  key(0.4f, keyGrip(), Vec3::Zero(), Vec3(0, 0, -55)),

@@ -1,4 +1,4 @@
-// Scenario runner for the playground tests: a synthetic clip seen by the head-mounted
+// Scenario runner for the playground tests: a synthetic clip seen by the desk-facing
 // synthetic tof sensor, tracked by the tracker (initialised from the first frame's ground
 // truth), drives the playground; `onFrame` sees the playground after every input frame.
 // Set DYNAHAND_PLAYGROUND_TRUTH=1 to drive it by the ground truth instead (tuning only).
@@ -29,7 +29,6 @@ inline ScenarioStats runScenario(Playground& pg, const std::string& clip, int fr
   o.clip = clip;
   o.profile = "tof";
   o.frameCount = frames;
-  o.scene.placement = synth::CameraPlacement::HeadMounted;
   auto seq = synth::SyntheticSequence::create(o);
   EXPECT_TRUE(seq.ok()) << (seq.ok() ? "" : seq.message());
   ScenarioStats stats;

@@ -27,21 +27,32 @@ std::unique_ptr<Playground> build(const SceneSpec& scene) {
   return pg.ok() ? std::move(*pg) : nullptr;
 }
 
-// The hand's rest pose as the head-mounted synthetic camera sees it (palm down, fingers
-// forward), in the camera frame.
-model::ModelPose restHandInCamera(float pitch) {
+// The hand's rest pose as the desk-facing synthetic camera sees it (palm towards the camera,
+// fingers up, forearm tilted 15 degrees away; docs/synth.md), in the camera frame. The
+// example scenes' camera maps it to a palm-down hand 15 cm above the table.
+model::ModelPose restHandInCamera() {
   const model::ArticulatedModel hand = model::makeDefaultHand();
   model::JointAngles a = model::zeroAngles(hand);
   model::clampToLimits(hand, a);
-  const Vec3 down(0, std::cos(pitch), std::sin(pitch));
-  const Vec3 forward(0, -std::sin(pitch), std::cos(pitch));
-  const Vec3 dorsal = -down;
   Mat3 axes;
-  axes.col(0) = dorsal.cross(forward);
-  axes.col(1) = dorsal;
-  axes.col(2) = forward;
-  a.root = Pose{Vec3(0, 0.06f, 0.4f), Quat(axes)};
+  axes.col(0) = Vec3::UnitX();
+  axes.col(1) = Vec3::UnitZ();
+  axes.col(2) = -Vec3::UnitY();
+  a.root =
+      Pose{Vec3(0, 0.07f, 0.4f), Quat(Eigen::AngleAxisf(15.0f * kDeg, Vec3::UnitX())) * Quat(axes)};
   return model::forwardKinematics(hand, a);
+}
+
+// Only the examples' table and camera.
+SceneSpec tableOnly() {
+  auto scene = parseScene(
+      R"({"format": "dynahand-scene", "version": 1, "name": "table",
+          "camera": {"position": [0, -0.217, -0.054], "pitchDeg": -75, "yawDeg": 180},
+          "objects": [{"name": "table", "kind": "box", "static": true, "size": [1.0, 0.04, 0.7],
+                       "position": [0, -0.02, -0.05]}]})",
+      "table");
+  EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.message());
+  return scene.ok() ? *scene : SceneSpec{};
 }
 
 TEST(SceneFile, ExampleScenesLoadAndBuild) {
@@ -116,6 +127,16 @@ TEST(SceneFile, CameraLookingDownMapsCameraDownToSceneDown) {
   EXPECT_LT((camera.rotate(Vec3::UnitX()) - Vec3::UnitX()).norm(), 1e-6f);
 }
 
+TEST(SceneFile, DeskCameraMapsThePalmDownFingersForward) {
+  // The examples' camera (pitch -75, yaw 180): the desk-facing rest hand's dorsal direction
+  // (away from the camera, tilted 15 degrees) points up, its fingers forward (-z).
+  const Pose camera = cameraLookingDown(Vec3::Zero(), -75.0f * kDeg, 180.0f * kDeg);
+  const Quat tilt(Eigen::AngleAxisf(15.0f * kDeg, Vec3::UnitX()));
+  EXPECT_LT((camera.rotate(tilt * Vec3::UnitZ()) - Vec3::UnitY()).norm(), 1e-5f);
+  EXPECT_LT((camera.rotate(tilt * -Vec3::UnitY()) - -Vec3::UnitZ()).norm(), 1e-5f);
+  EXPECT_LT((camera.rotate(Vec3::UnitX()) - -Vec3::UnitX()).norm(), 1e-5f);
+}
+
 TEST(SceneBuild, ObjectsRestOnTheTableWithoutTheHand) {
   const auto pg = build(loadExample("grasp"));
   ASSERT_NE(pg, nullptr);
@@ -159,11 +180,12 @@ TEST(SceneBuild, BarbellCapsStayOnTheBar) {
 }
 
 TEST(VirtualHand, HoldsStillAtAStillTarget) {
-  const SceneSpec scene = loadExample("wall");
+  const SceneSpec scene = tableOnly();
   const auto pg = build(scene);
   ASSERT_NE(pg, nullptr);
-  const model::ModelPose rest = restHandInCamera(35.0f * kDeg);
+  const model::ModelPose rest = restHandInCamera();
   pg->placeHand(rest);
+  EXPECT_NEAR(pg->bodyPose(pg->bodyIndex("hand/palm")).p.y(), 0.151f, 0.002f) << "15 cm up";
   for (int i = 0; i < 60; ++i) pg->step(rest, 1.0f / 30.0f);
   const model::ModelPose now = pg->handPose();
   const model::ModelPose& target = pg->handTarget();
@@ -177,10 +199,10 @@ TEST(VirtualHand, HoldsStillAtAStillTarget) {
 
 TEST(VirtualHand, PalmStaysOnTheTableWhenTheTargetSinksThroughIt) {
   // A target 30 cm below the table top: contacts stop the capped drive at the table.
-  const SceneSpec scene = loadExample("wall");
+  const SceneSpec scene = tableOnly();
   const auto pg = build(scene);
   ASSERT_NE(pg, nullptr);
-  model::ModelPose rest = restHandInCamera(35.0f * kDeg);
+  model::ModelPose rest = restHandInCamera();
   pg->placeHand(rest);
   model::ModelPose sunk = rest;
   const Vec3 down = pg->trackingToScene().q.conjugate() * Vec3(0, -0.3f, 0);
@@ -224,13 +246,15 @@ TEST(Navigation, PlaygroundAppliesTheOffsetToTheHand) {
   ASSERT_NE(pg, nullptr);
   Intrinsics camera{320, 240, 224.0f, 224.0f, 159.5f, 119.5f};
   pg->setCameraIntrinsics(camera);
-  model::ModelPose rest = restHandInCamera(35.0f * kDeg);
+  model::ModelPose rest = restHandInCamera();
   const Vec3 shift = camera.deproject(316.0f, 119.5f, rest.bodies[1].p.z()) -
                      Vec3(rest.bodies[1].p.x(), rest.bodies[1].p.y(), rest.bodies[1].p.z());
   for (Pose& p : rest.bodies) p.p.x() += shift.x();
   const Vec3 before = pg->trackingToScene().p;
   for (int i = 0; i < 15; ++i) pg->step(rest, 1.0f / 30.0f);
-  EXPECT_GT(pg->trackingToScene().p.x() - before.x(), 0.05f);
+  // The workspace moves along the camera's x axis (as seen in the scene).
+  const Vec3 cameraRight = pg->scene().camera.rotate(Vec3::UnitX());
+  EXPECT_GT((pg->trackingToScene().p - before).dot(cameraRight), 0.05f);
 }
 
 TEST(PlayOutput, HeaderAndFrameLines) {

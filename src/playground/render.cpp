@@ -14,6 +14,8 @@
 namespace dynahand::playground {
 namespace {
 
+constexpr float kNear = 0.01f;  // m, near clipping plane
+
 struct Polygon {
   float depth = 0.0f;  // m from the eye, mean over the face's vertices
   std::vector<cv::Point> points;
@@ -54,21 +56,27 @@ Status renderPng(const Playground& playground, const RenderView& view,
       const Vec3 onFace =
           pose.transform(shape.vertices()[static_cast<std::size_t>(face.vertices[0])]);
       if (normal.dot(onFace - view.eye) >= 0.0f) continue;  // back face
-      Polygon poly;
-      bool visible = true;
+      // Camera coordinates, clipped against the near plane (Sutherland-Hodgman, one plane).
+      std::vector<Vec3> cam, clipped;
       for (int v : face.vertices) {
         const Vec3 rel = pose.transform(shape.vertices()[static_cast<std::size_t>(v)]) - view.eye;
-        const float z = rel.dot(forward);
-        if (z < 0.01f) {
-          visible = false;
-          break;
-        }
-        poly.depth += z;
-        poly.points.emplace_back(static_cast<int>(std::lround(cx + f * rel.dot(right) / z)),
-                                 static_cast<int>(std::lround(cy + f * rel.dot(down) / z)));
+        cam.emplace_back(rel.dot(right), rel.dot(down), rel.dot(forward));
       }
-      if (!visible) continue;
-      poly.depth /= static_cast<float>(face.vertices.size());
+      for (std::size_t i = 0; i < cam.size(); ++i) {
+        const Vec3& a = cam[i];
+        const Vec3& b = cam[(i + 1) % cam.size()];
+        if (a.z() >= kNear) clipped.push_back(a);
+        if ((a.z() >= kNear) != (b.z() >= kNear))
+          clipped.push_back(a + (b - a) * ((kNear - a.z()) / (b.z() - a.z())));
+      }
+      if (clipped.size() < 3) continue;
+      Polygon poly;
+      for (const Vec3& c : clipped) {
+        poly.depth += c.z();
+        poly.points.emplace_back(static_cast<int>(std::lround(cx + f * c.x() / c.z())),
+                                 static_cast<int>(std::lround(cy + f * c.y() / c.z())));
+      }
+      poly.depth /= static_cast<float>(clipped.size());
       const double shade = 0.45 + 0.55 * static_cast<double>(std::max(0.0f, normal.dot(light)));
       poly.colour = base * shade;
       polygons.push_back(std::move(poly));

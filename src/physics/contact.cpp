@@ -60,10 +60,44 @@ int mostAlignedFace(const ConvexShape& s, const Quat& q, const Vec3& dir, float*
   return best;
 }
 
+// Separation of the two hulls along the unit world axis (A towards B): > 0 apart, < 0 overlap.
+float separationAlong(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
+                      const Pose& poseB, const Vec3& axis) {
+  const Vec3 onA = poseA.transform(a.support(poseA.q.conjugate() * axis));
+  const Vec3 onB = poseB.transform(b.support(poseB.q.conjugate() * -axis));
+  return axis.dot(onB - onA);
+}
+
+// MPR's direction follows the line between the two centres, so a small body against a large
+// box (a fingertip low on a wall, a block near the table's edge) can get the normal of the
+// wrong face and be pushed through. For a hull with few faces (boxes, walls, tables) its face
+// axes are tested as separating axes, and the one of least penetration replaces MPR's
+// direction when it separates better. Hulls with many faces (the hand's) add no axes.
+constexpr std::size_t kFewFaces = 12;
+Vec3 leastPenetrationAxis(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
+                          const Pose& poseB, const Vec3& mprAxis) {
+  Vec3 best = mprAxis;
+  float bestSep = separationAlong(a, poseA, b, poseB, mprAxis);
+  auto tryFaces = [&](const ConvexShape& s, const Quat& q, float sign) {
+    if (s.faces().size() > kFewFaces) return;
+    for (const Face& f : s.faces()) {
+      const Vec3 axis = sign * (q * f.normal);
+      const float sep = separationAlong(a, poseA, b, poseB, axis);
+      if (sep > bestSep + 1e-6f) {
+        bestSep = sep;
+        best = axis;
+      }
+    }
+  };
+  tryFaces(a, poseA.q, 1.0f);
+  tryFaces(b, poseB.q, -1.0f);
+  return best;
+}
+
 }  // namespace
 
 int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b, const Pose& poseB,
-                  float margin, ManifoldPoint* points, Vec3* normal) {
+                  float margin, ManifoldPoint* points, Vec3* normal, bool faceAxes) {
   const CcdObject objA{&a, poseA, poseA.transform(a.centroid()), 0.5f * margin};
   const CcdObject objB{&b, poseB, poseB.transform(b.centroid()), 0.5f * margin};
   ccd_t ccd;
@@ -80,6 +114,7 @@ int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
   Vec3 n(static_cast<float>(dir.v[0]), static_cast<float>(dir.v[1]), static_cast<float>(dir.v[2]));
   if (!(n.squaredNorm() > 0.0f) || !n.allFinite()) return 0;
   n.normalize();
+  if (faceAxes) n = leastPenetrationAxis(a, poseA, b, poseB, n);
 
   // Reference face: A's face along n or B's face along -n, whichever is better aligned
   // (ties go to A so the choice is stable).
@@ -205,10 +240,12 @@ void World::buildContacts(float h) {
       const float reach = m.bodies[i].boundingRadius + m.bodies[j].boundingRadius + margin;
       if ((s.position[i] - s.position[j]).squaredNorm() > reach * reach) continue;
       Vec3 nrm;
-      const int count = collideConvex(shapes_[static_cast<std::size_t>(m.bodies[i].shape)],
-                                      pose(static_cast<BodyId>(i)),
-                                      shapes_[static_cast<std::size_t>(m.bodies[j].shape)],
-                                      pose(static_cast<BodyId>(j)), margin, manifold.data(), &nrm);
+      const bool againstStatic =
+          m.bodies[i].type == BodyType::Static || m.bodies[j].type == BodyType::Static;
+      const int count = collideConvex(
+          shapes_[static_cast<std::size_t>(m.bodies[i].shape)], pose(static_cast<BodyId>(i)),
+          shapes_[static_cast<std::size_t>(m.bodies[j].shape)], pose(static_cast<BodyId>(j)),
+          margin, manifold.data(), &nrm, againstStatic);
       const auto key = static_cast<std::uint32_t>(i * n + j);
       while (cursor < s.contacts.size() && s.contacts[cursor].pair < key) ++cursor;
       for (int k = 0; k < count; ++k) {

@@ -95,8 +95,11 @@ struct ManifoldPoint {
 
 // Narrow phase between two convex bodies (body-frame poses). Writes up to 4 points and the
 // unit normal from A to B; returns the point count (0: farther apart than margin).
+// faceAxes: also test the face normals of a hull with few faces (<= 12) as separating axes and
+// take the one of least penetration when it beats MPR's direction (used against static
+// bodies: walls and tables, where MPR's centre-line direction can pick the wrong face).
 int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b, const Pose& poseB,
-                  float margin, ManifoldPoint* points, Vec3* normal);
+                  float margin, ManifoldPoint* points, Vec3* normal, bool faceAxes = false);
 
 constexpr int kJointImpulses = 9;  // 3 point rows + (lower, upper) x 3 angles
 

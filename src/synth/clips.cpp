@@ -120,6 +120,27 @@ Shape cylinderGrasp() {
   setThumb(s, digit(25, 25, 15), 20, 25);
   return s;
 }
+// Open above an object, the thumb kept up beside the palm so it does not sweep the object.
+Shape reachOpen() {
+  Shape s = preGrasp();
+  setThumb(s, digit(-5, 10), 0, 0);
+  return s;
+}
+// Closing around an object under the palm: a power grasp aiming tighter than the object, so
+// fingers and thumb wrap it as far as it lets them.
+Shape powerGrasp() {
+  Shape s;
+  for (int f = 0; f < 4; ++f) setFinger(s, f, 70, 0, 100, 60);
+  setThumb(s, digit(45, 20, 15), 35, 35);
+  return s;
+}
+// Thumb against the side of the index's middle phalanx (a key grip), for turning a fin.
+Shape keyGrip() {
+  Shape s;
+  for (int f = 0; f < 4; ++f) setFinger(s, f, 50, 0, 80, 40);
+  setThumb(s, digit(30, 10, 10), 15, 10);
+  return s;
+}
 Shape withWrist(Shape s, float flexion, float deviation) {
   setWrist(s, flexion, deviation);
   return s;
@@ -177,6 +198,24 @@ std::vector<ClipDefinition> makeClips() {
   c.push_back({{"grasp-cylinder", "reaching for and grasping an imaginary 5 cm cylinder", 3.0f, 1},
                {{key(0.0f, relaxed()), key(0.7f, preGrasp()), key(1.4f, cylinderGrasp()),
                  key(2.2f, cylinderGrasp())}}});
+  // Playground scenarios (docs/playground.md): offsets along the forearm frame, so with the
+  // head-mounted camera y is up and z is forward.
+  c.push_back(
+      {{"reach-grasp-lift",
+        "open hand lowering onto an object, closing around it, lifting it 16 cm and "
+        "holding it",
+        4.6f, 1},
+       {{key(0.0f, reachOpen(), Vec3(0, 0.0f, 0)), key(0.7f, reachOpen(), Vec3(0, -0.075f, 0)),
+         key(1.3f, powerGrasp(), Vec3(0, -0.075f, 0)), key(2.0f, powerGrasp(), Vec3(0, 0.1f, 0)),
+         key(4.4f, powerGrasp(), Vec3(0, 0.1f, 0))}}});
+  c.push_back({{"push-forward", "fist pushing 13 cm forward and staying there", 2.6f, 1},
+               {{key(0.0f, fist(), Vec3(0, 0, -0.03f)), key(0.4f, fist(), Vec3(0, 0, -0.03f)),
+                 key(1.6f, fist(), Vec3(0, 0, 0.1f)), key(2.4f, fist(), Vec3(0, 0, 0.1f))}}});
+  c.push_back({{"turn-key", "key grip rolling the forearm 110 degrees", 2.6f, 1},
+               {{key(0.0f, keyGrip(), Vec3::Zero(), Vec3(0, 0, -55)),
+                 key(0.4f, keyGrip(), Vec3::Zero(), Vec3(0, 0, -55)),
+                 key(1.8f, keyGrip(), Vec3::Zero(), Vec3(0, 0, 55)),
+                 key(2.4f, keyGrip(), Vec3::Zero(), Vec3(0, 0, 55))}}});
   {
     std::vector<Key> right = openCloseTrack(), left = waveTrack();
     for (Key& k : right) k.offset.x() += 0.11f;

@@ -76,6 +76,36 @@ TEST(Contacts, DrivenFingersDoNotInterpenetrate) {
   EXPECT_LT(w.pose(ib).p.y() - w.pose(ia).p.y(), 0.0185f);
 }
 
+// A small body pressed into a tall static wall near its bottom: the line between the centres
+// points at the wall's bottom face, but the contact must push out through the front face.
+TEST(Contacts, SmallBodyLowOnAStaticWallIsPushedOutOfTheNearestFace) {
+  WorldSettings settings;
+  settings.contactMargin = 0.01f;
+  World w(settings);
+  BodyDef wall;
+  wall.shape = w.addShape(ConvexShape::box(Vec3(0.4f, 0.2f, 0.025f)));
+  wall.type = BodyType::Static;
+  wall.pose.p = Vec3(0, 0.2f, 0);  // front face z = 0.025, bottom face y = 0
+  w.addBody(wall);
+  // A fingertip-sized ball (hull of 26 points, radius 1 cm).
+  std::vector<Vec3> ball;
+  for (int i = -1; i <= 1; ++i)
+    for (int j = -1; j <= 1; ++j)
+      for (int k = -1; k <= 1; ++k)
+        if (i != 0 || j != 0 || k != 0)
+          ball.push_back(0.01f * Vec3(i, j, k).cast<float>().normalized());
+  BodyDef small;
+  small.shape = w.addShape(*ConvexShape::fromPoints(ball));
+  small.pose.p = Vec3(0, 0.03f, 0.025f + 0.01f - 0.004f);  // 4 mm into the front face
+  const BodyId b = w.addBody(small);
+  w.step(kDt);
+  ASSERT_FALSE(w.contacts().empty());
+  for (const ContactPoint& c : w.contacts()) EXPECT_GT(std::abs(c.normal.z()), 0.99f);
+  for (int i = 0; i < 30; ++i) w.step(kDt);
+  EXPECT_GT(w.pose(b).p.z(), 0.025f + 0.01f - 0.0005f) << "pushed out of the front face";
+  EXPECT_NEAR(w.pose(b).p.y(), 0.03f, 0.001f) << "not pushed along the face";
+}
+
 TEST(Contacts, FilteredPairsPassThrough) {
   World w;
   const int box = w.addShape(ConvexShape::box(Vec3(0.02f, 0.02f, 0.02f)));

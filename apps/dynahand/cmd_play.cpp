@@ -1,0 +1,191 @@
+// dynahand play: runs a playground scene (docs/playground.md) driven by a tracked recording
+// or a pose file, writing every scene body's pose per frame and optional rendered frames.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+
+#include "dynahand/command.h"
+#include "dynahand/model_pose.h"
+#include "dynahand/playground.h"
+#include "dynahand/playground_io.h"
+#include "dynahand/progress.h"
+#include "dynahand/sequence.h"
+#include "dynahand/tracker.h"
+
+namespace dynahand::cli {
+namespace {
+
+struct PlayOptions {
+  std::string scene, input, out, framesDir, init = "auto";
+  float handLength = 0.19f, handWidth = 0.085f, fps = 30.0f;
+  int frames = -1, renderEvery = 1;
+  std::vector<float> eye, target;
+};
+
+// Where the hand poses come from: a tracked recording or a pose file (camera frame).
+class PoseSource {
+ public:
+  virtual ~PoseSource() = default;
+  virtual int frameCount() const = 0;
+  virtual float framesPerSecond() const = 0;
+  virtual std::optional<Intrinsics> intrinsics() const { return std::nullopt; }
+  // The hand pose of frame i, nullopt when the tracker lost the hand.
+  virtual std::optional<model::ModelPose> pose(int i) = 0;
+};
+
+class PoseFileSource : public PoseSource {
+ public:
+  PoseFileSource(model::PoseSequence poses, float fps) : poses_(std::move(poses)), fps_(fps) {}
+  int frameCount() const override { return static_cast<int>(poses_.frames.size()); }
+  float framesPerSecond() const override { return fps_; }
+  std::optional<model::ModelPose> pose(int i) override {
+    return poses_.frames[static_cast<std::size_t>(i)];
+  }
+
+ private:
+  model::PoseSequence poses_;
+  float fps_;
+};
+
+class TrackedSource : public PoseSource {
+ public:
+  TrackedSource(SequenceReader reader, std::unique_ptr<track::Tracker> tracker)
+      : reader_(std::move(reader)), tracker_(std::move(tracker)) {}
+  int frameCount() const override { return reader_.info().frameCount; }
+  float framesPerSecond() const override { return reader_.info().framesPerSecond; }
+  std::optional<Intrinsics> intrinsics() const override { return reader_.info().intrinsics; }
+  std::optional<model::ModelPose> pose(int i) override {
+    auto frame = reader_.frame(i);
+    if (!frame) throw std::runtime_error(frame.message());
+    const track::TrackResult& r = tracker_->track(*frame);
+    if (r.hands.empty() || !r.hands.front().tracked) return std::nullopt;
+    return r.hands.front().pose;
+  }
+
+ private:
+  SequenceReader reader_;
+  std::unique_ptr<track::Tracker> tracker_;
+};
+
+std::unique_ptr<PoseSource> openSource(const PlayOptions& o, const model::ArticulatedModel& hand) {
+  if (o.input.rfind("camera:", 0) == 0)
+    throw UsageError("live cameras: record with 'dynahand record' first, then play the recording");
+  if (!std::filesystem::exists(o.input)) throw UsageError("input not found: " + o.input);
+  if (std::filesystem::path(o.input).extension() == ".jsonl") {
+    auto poses = model::loadPoseSequence(o.input);
+    if (!poses) throw UsageError(poses.message());
+    const Status s = model::checkPoseSequence(*poses, hand);
+    if (!s) throw UsageError(s.message());
+    if (poses->frames.empty()) throw UsageError(o.input + " holds no pose");
+    return std::make_unique<PoseFileSource>(std::move(*poses), o.fps);
+  }
+  auto reader = SequenceReader::open(o.input);
+  if (!reader) throw UsageError(reader.message());
+  auto tracker = track::Tracker::create(hand, reader->info().intrinsics);
+  if (!tracker) throw std::runtime_error(tracker.message());
+  if (o.init == "gt") {
+    const auto gt = reader->groundTruth(0);
+    if (!gt) throw UsageError("--init gt: " + o.input + " has no ground truth for frame 0");
+    const Status s = (*tracker)->initializeFromKeypoints(*gt);
+    if (!s) throw std::runtime_error("--init gt: " + s.message());
+  } else if (o.init != "auto") {
+    auto poses = model::loadPoseSequence(o.init);
+    if (!poses || poses->frames.empty())
+      throw UsageError("--init: " + (poses ? o.init + " holds no pose" : poses.message()));
+    const Status s = model::checkPoseSequence(*poses, hand);
+    if (!s) throw UsageError("--init: " + s.message());
+    (*tracker)->initialize(poses->frames.front());
+  }
+  return std::make_unique<TrackedSource>(std::move(*reader), std::move(*tracker));
+}
+
+int runPlay(const PlayOptions& o) {
+  if (!std::filesystem::exists(o.scene)) throw UsageError("scene not found: " + o.scene);
+  auto scene = playground::loadScene(o.scene);
+  if (!scene) throw UsageError(scene.message());
+  const model::ArticulatedModel hand = model::makeDefaultHand({o.handLength, o.handWidth});
+  auto source = openSource(o, hand);
+  auto pg = playground::Playground::create(*scene, hand);
+  if (!pg) throw UsageError(pg.message());
+  if (auto camera = source->intrinsics()) (*pg)->setCameraIntrinsics(*camera);
+
+  playground::RenderView view;
+  if (o.eye.size() == 3) view.eye = Vec3(o.eye[0], o.eye[1], o.eye[2]);
+  if (o.target.size() == 3) view.target = Vec3(o.target[0], o.target[1], o.target[2]);
+  if (!o.framesDir.empty()) std::filesystem::create_directories(o.framesDir);
+  std::ofstream out;
+  if (!o.out.empty()) {
+    out.open(o.out);
+    if (!out) throw UsageError("cannot write " + o.out);
+    out << playground::playHeaderJson(**pg) << '\n';
+  }
+
+  const int total = o.frames < 0 ? source->frameCount() : std::min(o.frames, source->frameCount());
+  const float dt = 1.0f / source->framesPerSecond();
+  installInterruptHandler();
+  Progress progress("play", total);
+  int lost = 0, done = 0;
+  for (int i = 0; i < total && !interrupted(); ++i) {
+    const std::optional<model::ModelPose> pose = source->pose(i);
+    lost += pose ? 0 : 1;
+    if (i == 0 && pose) (*pg)->placeHand(*pose);
+    (*pg)->step(pose, dt);
+    if (out.is_open()) out << playground::playFrameJson(**pg, i) << '\n';
+    if (!o.framesDir.empty() && i % o.renderEvery == 0) {
+      char name[32];
+      std::snprintf(name, sizeof name, "%06d.png", i);
+      const Status s = playground::renderPng(**pg, view, std::filesystem::path(o.framesDir) / name,
+                                             scene->name + "  frame " + std::to_string(i));
+      if (!s) throw std::runtime_error(s.message());
+    }
+    ++done;
+    progress.update(done, pose ? "tracked" : "lost");
+  }
+  progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
+  std::printf("frames %d  hand lost in %d  simulated %.2f s\n", done, lost, (*pg)->time());
+  if (out.is_open()) std::printf("wrote %s\n", o.out.c_str());
+  if (!o.framesDir.empty()) std::printf("wrote pictures to %s\n", o.framesDir.c_str());
+  return interrupted() ? 130 : kExitOk;
+}
+
+const CommandRegistration kRegistration{Command{
+    "play", "drive a physics playground scene with a tracked (or recorded) hand",
+    [](CLI::App& sub) -> std::function<int()> {
+      auto o = std::make_shared<PlayOptions>();
+      sub.add_option("scene", o->scene, "scene file (JSON, docs/formats/scene.md)")->required();
+      sub.add_option("input", o->input,
+                     "recording to track (sequence folder, .rs/.json, PNG folder, .oni) or a "
+                     "pose file (.jsonl, camera frame)")
+          ->required();
+      sub.add_option("-o,--out", o->out, "every scene body's pose per frame (JSON lines)");
+      sub.add_option("--frames-dir", o->framesDir, "write a rendered PNG per frame here");
+      sub.add_option("--render-every", o->renderEvery, "render every n-th frame")
+          ->check(CLI::Range(1, 100000));
+      sub.add_option("--eye", o->eye, "render camera position in the scene, m (x y z)")
+          ->expected(3);
+      sub.add_option("--look-at", o->target, "point the render camera looks at, m (x y z)")
+          ->expected(3);
+      sub.add_option("--init", o->init,
+                     "recordings: gt (ground truth of frame 0), auto, or a pose JSONL file");
+      sub.add_option("--fps", o->fps, "pose files: frames per second")
+          ->check(CLI::Range(1.0f, 1000.0f));
+      sub.add_option("--frames", o->frames, "number of frames (default: all)")
+          ->check(CLI::Range(1, 100000000));
+      sub.add_option("--hand-length", o->handLength, "wrist crease to middle fingertip, m")
+          ->check(CLI::Range(0.10f, 0.30f));
+      sub.add_option("--hand-width", o->handWidth, "palm width at the knuckles, m")
+          ->check(CLI::Range(0.05f, 0.15f));
+      sub.footer(
+          "Examples:\n"
+          "  dynahand synth --motion reach-grasp-lift --frames 132 --out /tmp/g\n"
+          "  dynahand play examples/scenes/grasp.json /tmp/g --init gt --out grasp.jsonl\n"
+          "  dynahand play examples/scenes/barbell.json /tmp/g/poses.jsonl --frames-dir /tmp/pics\n"
+          "  dynahand play examples/scenes/playground.json take01/ --frames-dir /tmp/pics "
+          "--render-every 10 --eye 0 0.5 0.6 --look-at 0 0.05 -0.05");
+      return [o] { return runPlay(*o); };
+    }}};
+
+}  // namespace
+}  // namespace dynahand::cli

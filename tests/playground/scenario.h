@@ -1,0 +1,70 @@
+// Scenario runner for the playground tests: a synthetic clip seen by the desk-facing
+// synthetic tof sensor, tracked by the tracker (initialised from the first frame's ground
+// truth), drives the playground; `onFrame` sees the playground after every input frame.
+// Set DYNAHAND_PLAYGROUND_TRUTH=1 to drive it by the ground truth instead (tuning only).
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <functional>
+#include <string>
+
+#include "dynahand/playground.h"
+#include "dynahand/synth.h"
+#include "dynahand/tracker.h"
+#include "scene_files.h"
+
+namespace dynahand::playground::test {
+
+struct ScenarioStats {
+  int frames = 0;
+  int trackedFrames = 0;
+  float meanKeypointErrorM = 0.0f;  // tracker vs ground truth, mean over frames and keypoints
+};
+
+inline ScenarioStats runScenario(Playground& pg, const std::string& clip, int frames,
+                                 const std::function<void(int, const Playground&)>& onFrame) {
+  synth::SynthOptions o;
+  o.clip = clip;
+  o.profile = "tof";
+  o.frameCount = frames;
+  auto seq = synth::SyntheticSequence::create(o);
+  EXPECT_TRUE(seq.ok()) << (seq.ok() ? "" : seq.message());
+  ScenarioStats stats;
+  if (!seq) return stats;
+  const bool truthOnly = std::getenv("DYNAHAND_PLAYGROUND_TRUTH") != nullptr;
+  auto tracker = track::Tracker::create(seq->model(0), seq->intrinsics());
+  EXPECT_TRUE(tracker.ok());
+  if (!tracker) return stats;
+  (*tracker)->initialize(seq->truth(0, 0).pose);
+  pg.setCameraIntrinsics(seq->intrinsics());
+  const float dt = 1.0f / o.framesPerSecond;
+  double errorSum = 0.0;
+  for (int i = 0; i < frames; ++i) {
+    const synth::SyntheticFrame& frame = seq->frame(i);
+    std::optional<model::ModelPose> pose;
+    if (truthOnly) {
+      pose = frame.hands[0].pose;
+    } else {
+      const track::TrackResult& r = (*tracker)->track(frame.depth);
+      if (!r.hands.empty() && r.hands[0].tracked) {
+        pose = r.hands[0].pose;
+        ++stats.trackedFrames;
+        float e = 0.0f;
+        for (std::size_t k = 0; k < 21; ++k)
+          e += (r.hands[0].keypoints21[k] - frame.hands[0].keypoints[k]).norm();
+        errorSum += static_cast<double>(e / 21.0f);
+      }
+    }
+    if (i == 0 && pose) pg.placeHand(*pose);
+    pg.step(pose, dt);
+    onFrame(i, pg);
+    ++stats.frames;
+  }
+  if (stats.trackedFrames > 0)
+    stats.meanKeypointErrorM = static_cast<float>(errorSum / stats.trackedFrames);
+  return stats;
+}
+
+}  // namespace dynahand::playground::test

@@ -2,6 +2,7 @@
 // drawn to PNG frames, an MP4 and a contact sheet; the winner's model must be drawn where
 // the hand is and nowhere far from it.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -38,7 +39,9 @@ bool isModelColour(const cv::Vec3b& bgr) {
 class RenderCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::filesystem::path(test::scratchDir("render_cli"));
+    // One folder per test process: CTest runs these tests in parallel processes.
+    dir_ = new std::filesystem::path(
+        test::scratchDir("render_cli_" + std::to_string(static_cast<long>(::getpid()))));
     const std::string d = dir_->string();
     ASSERT_EQ(run("synth --motion pinch --profile tof --frames " + std::to_string(kFrames) +
                   " --out " + d + "/clip"),

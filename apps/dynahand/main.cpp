@@ -2,8 +2,10 @@
 // cmd_<name>.cpp files and register themselves (command.h).
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 
+#include "dynahand/camera.h"
 #include "dynahand/command.h"
 #include "dynahand/core.h"
 
@@ -43,7 +45,13 @@ int main(int argc, char** argv) {
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {
       try {
-        return run();
+        const int code = run();
+        if (dynahand::cameraDriverThreadsOutliveCameras()) {
+          // OpenNI's driver threads outlive everything: end without static destructors.
+          std::fflush(nullptr);
+          std::_Exit(code);
+        }
+        return code;
       } catch (const UsageError& e) {
         std::fprintf(stderr, "dynahand %s: %s\n", sub->get_name().c_str(), e.what());
         return kExitUsage;

@@ -67,4 +67,9 @@ class DepthCamera {
 // Back ends compiled into this build, e.g. {"openni2", "freenect"}.
 std::vector<std::string> cameraBackends();
 
+// True once a camera driver was loaded whose threads keep running until the process ends
+// (OpenNI's, which cannot be shut down safely): a program should then end with std::_Exit
+// after flushing its output, since running static destructors under those threads can crash.
+bool cameraDriverThreadsOutliveCameras();
+
 }  // namespace dynahand

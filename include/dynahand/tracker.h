@@ -61,7 +61,8 @@ struct FitQuality {
   float dataNearModel = 0.0f;  // share of the hand's sample points within 10 mm of the model
   float modelOnHand = 0.0f;    // share of the camera-facing model surface (by area, forearm
                                // excluded) that projects onto segmented pixels
-  int fingertipsOffHand = 0;   // fingertip keypoints projecting outside the segmentation
+  int fingertipsOffHand = 0;   // fingertip keypoints projecting more than 3 pixels outside
+                               // the segmentation (onto background)
 };
 
 // One simulation's outcome this frame.

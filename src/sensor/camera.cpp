@@ -1,4 +1,5 @@
 // DepthCamera's static entry points: the table of compiled back ends.
+#include <atomic>
 #include <cmath>
 #include <span>
 
@@ -32,10 +33,20 @@ std::string backendNames() {
 }  // namespace
 
 namespace sensor {
+namespace {
+std::atomic<bool> driverThreadsOutlive{false};
+}  // namespace
+void noteDriverThreadsOutliveCameras() {
+  driverThreadsOutlive = true;
+}
 float focalFromFieldOfView(int pixels, float fovRadians) {
   return 0.5f * static_cast<float>(pixels) / std::tan(0.5f * fovRadians);
 }
 }  // namespace sensor
+
+bool cameraDriverThreadsOutliveCameras() {
+  return sensor::driverThreadsOutlive;
+}
 
 std::vector<std::string> cameraBackends() {
   std::vector<std::string> names;

@@ -16,6 +16,9 @@ struct CameraBackend {
   Result<std::unique_ptr<DepthCamera>> (*open)(const std::string& id, const CameraOptions& options);
 };
 
+// Records that a driver with never-ending threads was loaded (see camera.h).
+void noteDriverThreadsOutliveCameras();
+
 #ifdef DYNAHAND_HAVE_OPENNI2
 extern const CameraBackend kOpenNI2Backend;
 // OpenNI::initialize once per process; Error with OpenNI's reason when it fails.

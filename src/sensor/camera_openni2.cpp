@@ -163,7 +163,10 @@ Status initializeOpenNI() {
   static const std::string failure = [] {
     // No OpenNI::shutdown() at exit: it unloads drivers whose threads may still run
     // (the Dummy device's never stops), which crashes the process on the way out.
-    if (openni::OpenNI::initialize() == openni::STATUS_OK) return std::string{};
+    if (openni::OpenNI::initialize() == openni::STATUS_OK) {
+      noteDriverThreadsOutliveCameras();
+      return std::string{};
+    }
     return "openni2: OpenNI could not be initialised (" + openniError() + ")";
   }();
   if (!failure.empty()) return Error{failure};

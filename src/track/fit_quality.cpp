@@ -7,13 +7,14 @@ namespace dynahand::track {
 namespace {
 
 constexpr float kNearSurfaceM = 0.010f;
+constexpr int kTipTolerancePixels = 3;
 
 // Whether pixel (u, v) or a neighbour within the working stride is segmented (the mask
 // holds the samples the segmentation visited, which may be every stride-th pixel).
-bool onMask(const CloudFrame& cloud, float uf, float vf) {
+bool onMask(const CloudFrame& cloud, float uf, float vf, int extra = 0) {
   const int width = cloud.intrinsics.width, height = cloud.intrinsics.height;
   const int u = static_cast<int>(std::lround(uf)), v = static_cast<int>(std::lround(vf));
-  const int r = std::max(0, cloud.filterStride - 1);
+  const int r = std::max(0, cloud.filterStride - 1) + extra;
   for (int dv = -r; dv <= r; ++dv) {
     for (int du = -r; du <= r; ++du) {
       const int x = u + du, y = v + dv;
@@ -71,8 +72,10 @@ FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const Vec3> po
       ++q.fingertipsOffHand;
       continue;
     }
+    // The tip keypoint is the very end of the finger, where the segmentation's edge (flying
+    // pixels removed) stops a pixel or two short: a small tolerance.
     const Vec2 uv = cloud.intrinsics.project(tip);
-    if (!onMask(cloud, uv.x(), uv.y())) ++q.fingertipsOffHand;
+    if (!onMask(cloud, uv.x(), uv.y(), kTipTolerancePixels)) ++q.fingertipsOffHand;
   }
   return q;
 }

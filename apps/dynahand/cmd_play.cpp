@@ -1,10 +1,14 @@
 // dynahand play: runs a playground scene (docs/playground.md) driven by a tracked recording
-// or a pose file, writing every scene body's pose per frame and optional rendered frames.
+// or a pose file, writing every scene body's pose per frame and optional rendered frames,
+// and with --serve showing it live in the viewer page ("scene" + "scene_poses" messages).
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "dynahand/command.h"
 #include "dynahand/model_pose.h"
@@ -13,6 +17,9 @@
 #include "dynahand/progress.h"
 #include "dynahand/sequence.h"
 #include "dynahand/tracker.h"
+#include "serve_session.h"
+#include "viewer_messages.h"
+#include "viewer_server.h"
 
 namespace dynahand::cli {
 namespace {
@@ -22,6 +29,10 @@ struct PlayOptions {
   float handLength = 0.19f, handWidth = 0.085f, fps = 30.0f;
   int frames = -1, renderEvery = 1;
   std::vector<float> eye, target;
+  // --serve: the viewer page and stream, paced at the input's rate unless fast.
+  bool serve = false, fast = false, loop = false;
+  viewer::ServerOptions server;
+  std::string webRoot;
 };
 
 // Where the hand poses come from: a tracked recording or a pose file (camera frame).
@@ -101,15 +112,100 @@ std::unique_ptr<PoseSource> openSource(const PlayOptions& o, const model::Articu
   return std::make_unique<TrackedSource>(std::move(*reader), std::move(*tracker));
 }
 
+// The scene as the viewer draws it: the hand in the page's skin tone, static bodies grey,
+// objects in turn from a palette.
+std::vector<viewer::SceneBody> viewerBodies(const playground::Playground& pg) {
+  // None of these passes for skin in the page tests (web/test/png.mjs isHandColour).
+  static const char* const kPalette[] = {"#3c8cc8", "#5aaa50", "#aa5aaa",
+                                         "#d2be3c", "#46bebe", "#c85050"};
+  std::vector<viewer::SceneBody> bodies;
+  int colour = 0;
+  for (const playground::SceneBody& b : pg.bodies()) {
+    std::string c = b.isHand ? "#e39a6f" : b.isStatic ? "#9ba0a5" : kPalette[colour++ % 6];
+    bodies.push_back({b.name, &pg.world().bodyShape(b.id), std::move(c)});
+  }
+  return bodies;
+}
+
+std::string scenePoses(const playground::Playground& pg, int frame) {
+  std::vector<Pose> poses;
+  poses.reserve(pg.bodies().size());
+  for (std::size_t i = 0; i < pg.bodies().size(); ++i)
+    poses.push_back(pg.bodyPose(static_cast<int>(i)));
+  return viewer::scenePosesMessage(frame, pg.time(), poses);
+}
+
+std::unique_ptr<viewer::ViewerServer> startViewer(PlayOptions o) {
+  o.server.webRoot = viewer::findViewerPage(o.webRoot);
+  std::string error;
+  auto server = viewer::ViewerServer::start(o.server, &error);
+  if (!server) throw std::runtime_error(error);
+  const std::string address = o.server.host + ":" + std::to_string(server->port());
+  if (server->pageAvailable())
+    std::printf("viewer at http://%s/  stream at ws://%s/\n", address.c_str(), address.c_str());
+  else
+    std::printf("stream at ws://%s/  (viewer page unavailable: %s)\n", address.c_str(),
+                o.webRoot.empty() ? "this build had no web/node_modules; run "
+                                    "scripts/install-deps.sh and rebuild"
+                                  : ("no index.html in " + o.webRoot).c_str());
+  std::fflush(stdout);
+  return server;
+}
+
+// Frame timing while serving: the input's rate (unless fast) and the page's pause, resume
+// and step buttons.
+class ServedClock {
+ public:
+  using Clock = std::chrono::steady_clock;
+  ServedClock(viewer::ViewerServer& server, float fps, bool fast)
+      : server_(server),
+        period_(std::chrono::duration_cast<Clock::duration>(
+            std::chrono::duration<double>(1.0 / static_cast<double>(fps)))),
+        fast_(fast) {}
+
+  // Returns when the next frame may run; false when Ctrl-C came first.
+  bool waitForNextFrame() {
+    for (;;) {
+      for (const viewer::ClientCommand c : server_.takeCommands()) {
+        if (c == viewer::ClientCommand::Pause) paused_ = true;
+        if (c == viewer::ClientCommand::Resume) paused_ = false;
+        if (c == viewer::ClientCommand::Step) {
+          paused_ = true;
+          ++steps_;
+        }
+      }
+      if (interrupted()) return false;
+      if (!paused_ || steps_ > 0) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      due_ = Clock::now();
+    }
+    if (steps_ > 0) --steps_;
+    if (!fast_) {
+      due_ += period_;
+      const auto now = Clock::now();
+      if (due_ > now)
+        std::this_thread::sleep_until(due_);
+      else
+        due_ = now;  // behind: no burst to catch up
+    }
+    return !interrupted();
+  }
+
+ private:
+  viewer::ViewerServer& server_;
+  Clock::duration period_;
+  bool fast_;
+  bool paused_ = false;
+  int steps_ = 0;
+  Clock::time_point due_ = Clock::now();
+};
+
 int runPlay(const PlayOptions& o) {
   if (!std::filesystem::exists(o.scene)) throw UsageError("scene not found: " + o.scene);
   auto scene = playground::loadScene(o.scene);
   if (!scene) throw UsageError(scene.message());
   const model::ArticulatedModel hand = model::makeDefaultHand({o.handLength, o.handWidth});
   auto source = openSource(o, hand);
-  auto pg = playground::Playground::create(*scene, hand);
-  if (!pg) throw UsageError(pg.message());
-  if (auto camera = source->intrinsics()) (*pg)->setCameraIntrinsics(*camera);
 
   playground::RenderView view;
   if (o.eye.size() == 3) view.eye = Vec3(o.eye[0], o.eye[1], o.eye[2]);
@@ -119,34 +215,70 @@ int runPlay(const PlayOptions& o) {
   if (!o.out.empty()) {
     out.open(o.out);
     if (!out) throw UsageError("cannot write " + o.out);
-    out << playground::playHeaderJson(**pg) << '\n';
+  }
+  std::unique_ptr<viewer::ViewerServer> server;
+  std::optional<ServedClock> clock;
+  if (o.serve) {
+    server = startViewer(o);
+    clock.emplace(*server, source->framesPerSecond(), o.fast);
+    std::printf("%sCtrl-C stops\n", o.loop ? "the scene restarts when the input ends; " : "");
+    std::fflush(stdout);
   }
 
   const int total = o.frames < 0 ? source->frameCount() : std::min(o.frames, source->frameCount());
   const float dt = 1.0f / source->framesPerSecond();
   installInterruptHandler();
-  Progress progress("play", total);
   int lost = 0, done = 0;
-  for (int i = 0; i < total && !interrupted(); ++i) {
-    const std::optional<model::ModelPose> pose = source->pose(i);
-    lost += pose ? 0 : 1;
-    if (i == 0 && pose) (*pg)->placeHand(*pose);
-    (*pg)->step(pose, dt);
-    if (out.is_open()) out << playground::playFrameJson(**pg, i) << '\n';
-    if (!o.framesDir.empty() && i % o.renderEvery == 0) {
-      char name[32];
-      std::snprintf(name, sizeof name, "%06d.png", i);
-      const Status s = playground::renderPng(**pg, view, std::filesystem::path(o.framesDir) / name,
-                                             scene->name + "  frame " + std::to_string(i));
-      if (!s) throw std::runtime_error(s.message());
+  double simulated = 0.0;
+  // One pass over the input; --serve --loop repeats it from a fresh scene (files are written
+  // on the first pass only).
+  for (int pass = 0; pass == 0 || (o.loop && !interrupted()); ++pass) {
+    if (pass > 0) source = openSource(o, hand);
+    auto pg = playground::Playground::create(*scene, hand);
+    if (!pg) throw UsageError(pg.message());
+    if (auto camera = source->intrinsics()) (*pg)->setCameraIntrinsics(*camera);
+    if (server) server->setWelcome({viewer::sceneMessage(viewerBodies(**pg), "y")});
+    if (pass == 0 && out.is_open()) out << playground::playHeaderJson(**pg) << '\n';
+    Progress progress("play", total);
+    for (int i = 0; i < total && !interrupted(); ++i) {
+      if (clock && !clock->waitForNextFrame()) break;
+      const std::optional<model::ModelPose> pose = source->pose(i);
+      if (i == 0 && pose) (*pg)->placeHand(*pose);
+      (*pg)->step(pose, dt);
+      if (server && server->hasClients()) server->publish(scenePoses(**pg, i));
+      if (pass > 0) continue;
+      lost += pose ? 0 : 1;
+      if (out.is_open()) out << playground::playFrameJson(**pg, i) << '\n';
+      if (!o.framesDir.empty() && i % o.renderEvery == 0) {
+        char name[32];
+        std::snprintf(name, sizeof name, "%06d.png", i);
+        const Status s =
+            playground::renderPng(**pg, view, std::filesystem::path(o.framesDir) / name,
+                                  scene->name + "  frame " + std::to_string(i));
+        if (!s) throw std::runtime_error(s.message());
+      }
+      ++done;
+      progress.update(done, pose ? "tracked" : "lost");
     }
-    ++done;
-    progress.update(done, pose ? "tracked" : "lost");
+    if (pass == 0) {
+      simulated = (*pg)->time();
+      progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
+      if (out.is_open()) out.flush();
+    }
+    if (server && !o.loop && !interrupted()) {
+      // Pages opened from now on see the final state too.
+      server->setWelcome({viewer::sceneMessage(viewerBodies(**pg), "y"),
+                          scenePoses(**pg, std::max(0, total - 1))});
+      std::printf("input finished: the page keeps the last state; Ctrl-C stops\n");
+      std::fflush(stdout);
+      while (!interrupted()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
   }
-  progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
-  std::printf("frames %d  hand lost in %d  simulated %.2f s\n", done, lost, (*pg)->time());
+  std::printf("frames %d  hand lost in %d  simulated %.2f s\n", done, lost, simulated);
   if (out.is_open()) std::printf("wrote %s\n", o.out.c_str());
   if (!o.framesDir.empty()) std::printf("wrote pictures to %s\n", o.framesDir.c_str());
+  // Ctrl-C is how a served session ends, not an interruption of its output.
+  if (server) return done == total ? kExitOk : 130;
   return interrupted() ? 130 : kExitOk;
 }
 
@@ -177,11 +309,22 @@ const CommandRegistration kRegistration{Command{
           ->check(CLI::Range(0.10f, 0.30f));
       sub.add_option("--hand-width", o->handWidth, "palm width at the knuckles, m")
           ->check(CLI::Range(0.05f, 0.15f));
+      sub.add_flag("--serve", o->serve,
+                   "show the scene live in the viewer page (dynahand serve's page and stream), "
+                   "at the input's rate; Ctrl-C stops");
+      sub.add_option("--port", o->server.port, "--serve: TCP port (0 = any free port)")
+          ->check(CLI::Range(0, 65535));
+      sub.add_option("--host", o->server.host, "--serve: address to listen on (127.0.0.1)");
+      sub.add_flag("--loop", o->loop, "--serve: restart the scene when the input ends");
+      sub.add_flag("--fast", o->fast, "--serve: run as fast as possible, not at the input's rate");
+      sub.add_option("--web-root", o->webRoot,
+                     "--serve: the page's folder instead of the built one");
       sub.footer(
           "Examples:\n"
           "  dynahand synth --motion reach-grasp-lift --frames 132 --out /tmp/g\n"
           "  dynahand play examples/scenes/grasp.json /tmp/g --init gt --out grasp.jsonl\n"
           "  dynahand play examples/scenes/barbell.json /tmp/g/poses.jsonl --frames-dir /tmp/pics\n"
+          "  dynahand play examples/scenes/grasp.json /tmp/g/poses.jsonl --serve --loop\n"
           "  dynahand play examples/scenes/playground.json take01/ --frames-dir /tmp/pics "
           "--render-every 10 --eye 0 0.5 0.6 --look-at 0 0.05 -0.05");
       return [o] { return runPlay(*o); };

@@ -6,83 +6,26 @@
 // missing.
 //
 //   node web/test/browser_test.mjs --dynahand build/release/apps/dynahand --out /tmp/viewer
-import { spawn } from 'node:child_process';
-import { createRequire } from 'node:module';
 import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
 import { decodePng, countHandPixels } from './png.mjs';
+import { arg, chromiumOrSkip, fail, openBrowser, outDir, skip, startDynahand } from './harness.mjs';
 
-const SKIP = 77;
-const CHROMIUM = '/usr/bin/chromium';
-// Chromium as the machine allows it: no GPU, no network beyond localhost, a fresh profile.
-const CHROMIUM_ARGS = [
-  '--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-  '--disable-background-networking', '--disable-component-update', '--disable-sync',
-  '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
-];
-
-function arg(name, fallback) {
-  const i = process.argv.indexOf(name);
-  return i > 0 && i + 1 < process.argv.length ? process.argv[i + 1] : fallback;
-}
+const chromium = chromiumOrSkip();
 const dynahand = arg('--dynahand');
-const outDir = arg('--out', fs.mkdtempSync(path.join(os.tmpdir(), 'dynahand-viewer-')));
-const clip = arg('--clip', 'wave');
-const screenshotPath = arg('--screenshot', path.join(outDir, 'viewer.png'));
-
-function skip(why) {
-  console.log(`SKIPPED: ${why}`);
-  process.exit(SKIP);
-}
-function fail(why) {
-  console.error(`FAILED: ${why}`);
-  process.exitCode = 1;
-  throw new Error(why);
-}
-
-let chromium;
-try {
-  const require = createRequire(new URL('../package.json', import.meta.url));
-  ({ chromium } = require('playwright-core'));
-} catch {
-  skip('playwright-core is not installed (run scripts/install-deps.sh: npm ci in web/)');
-}
-if (!fs.existsSync(CHROMIUM)) skip(`${CHROMIUM} is missing (run scripts/install-deps.sh)`);
 if (!dynahand) fail('--dynahand PATH is required');
-fs.mkdirSync(outDir, { recursive: true });
+const out = outDir('dynahand-viewer-');
+const clip = arg('--clip', 'wave');
+const screenshotPath = arg('--screenshot', path.join(out, 'viewer.png'));
 
-// Starts the server and resolves with its page address once it prints it.
-function startServer() {
-  const server = spawn(dynahand, ['serve', `synth:${clip}`, '--port', '0', '--init', 'gt'], {
-    stdio: ['ignore', 'pipe', 'inherit'],
-  });
-  const address = new Promise((resolve, reject) => {
-    let out = '';
-    server.stdout.on('data', (chunk) => {
-      out += chunk;
-      const page = out.match(/viewer at (http:\/\/\S+)/);
-      if (page) resolve(page[1]);
-      else if (out.includes('viewer page unavailable')) resolve(null);
-    });
-    server.on('exit', (code) => reject(new Error(`dynahand serve exited with ${code}: ${out}`)));
-  });
-  return { server, address };
-}
-
-const { server, address } = startServer();
+const { proc: server, address } = startDynahand(
+  dynahand, ['serve', `synth:${clip}`, '--port', '0', '--init', 'gt']);
 let context;
 try {
   const url = await address;
   if (!url) skip('this build has no viewer page (web/node_modules was missing at build time)');
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'dynahand-chromium-'));
-  context = await chromium.launchPersistentContext(profile, {
-    executablePath: CHROMIUM, headless: true, args: CHROMIUM_ARGS,
-    viewport: { width: 1280, height: 720 },
-  });
-  const page = context.pages()[0] || (await context.newPage());
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(String(e)));
+  let page, errors;
+  ({ context, page, errors } = await openBrowser(chromium, { width: 1280, height: 720 }));
   await page.goto(url);
 
   // Frames arrive and the tracked hand is shown.

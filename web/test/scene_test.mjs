@@ -7,44 +7,16 @@
 import crypto from 'node:crypto';
 import fs from 'node:fs';
 import http from 'node:http';
-import os from 'node:os';
 import path from 'node:path';
-import { createRequire } from 'node:module';
 import { decodePng } from './png.mjs';
+import { arg, chromiumOrSkip, fail, openBrowser, outDir, skip } from './harness.mjs';
 
-const SKIP = 77;
-const CHROMIUM = '/usr/bin/chromium';
-const CHROMIUM_ARGS = [
-  '--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-  '--disable-background-networking', '--disable-component-update', '--disable-sync',
-  '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
-];
-function arg(name, fallback) {
-  const i = process.argv.indexOf(name);
-  return i > 0 && i + 1 < process.argv.length ? process.argv[i + 1] : fallback;
-}
+const chromium = chromiumOrSkip();
 const pageDir = arg('--page');
-const outDir = arg('--out', fs.mkdtempSync(path.join(os.tmpdir(), 'dynahand-scene-')));
-function skip(why) {
-  console.log(`SKIPPED: ${why}`);
-  process.exit(SKIP);
-}
-function fail(why) {
-  console.error(`FAILED: ${why}`);
-  process.exitCode = 1;
-  throw new Error(why);
-}
-let chromium;
-try {
-  ({ chromium } = createRequire(new URL('../package.json', import.meta.url))('playwright-core'));
-} catch {
-  skip('playwright-core is not installed (run scripts/install-deps.sh: npm ci in web/)');
-}
-if (!fs.existsSync(CHROMIUM)) skip(`${CHROMIUM} is missing (run scripts/install-deps.sh)`);
 if (!pageDir || !fs.existsSync(path.join(pageDir, 'index.html'))) {
   skip(`no built viewer page in ${pageDir} (web/node_modules was missing at build time)`);
 }
-fs.mkdirSync(outDir, { recursive: true });
+const out = outDir('dynahand-scene-');
 
 // A box as the stream describes hulls: vertices and counter-clockwise faces.
 function box(hx, hy, hz, withFaces) {
@@ -124,19 +96,13 @@ function crate(image) {
 
 let context;
 try {
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'dynahand-chromium-'));
-  context = await chromium.launchPersistentContext(profile, {
-    executablePath: CHROMIUM, headless: true, args: CHROMIUM_ARGS,
-    viewport: { width: 960, height: 600 },
-  });
-  const page = context.pages()[0] || (await context.newPage());
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(String(e)));
+  let page, errors;
+  ({ context, page, errors } = await openBrowser(chromium, { width: 960, height: 600 }));
   await page.goto(url);
   await page.waitForFunction(() => window.dynahandViewer && window.dynahandViewer.framesDrawn >= 5,
     null, { timeout: 60000 });
   if ((await page.locator('#layer-scene').count()) !== 1) fail('no toggle for the scene layer');
-  const shotPath = path.join(outDir, 'scene.png');
+  const shotPath = path.join(out, 'scene.png');
   const first = crate(decodePng(await page.screenshot({ path: shotPath })));
   await page.waitForTimeout(800);
   const second = crate(decodePng(await page.screenshot()));

@@ -68,6 +68,31 @@ float separationAlong(const ConvexShape& a, const Pose& poseA, const ConvexShape
   return axis.dot(onB - onA);
 }
 
+// True when some axis shows the hulls more than `margin` apart, so MPR (~20 support calls
+// on the inflated hulls) would find no contact. Exact, not a heuristic: a separating axis
+// with a gap > margin proves the distance is > margin. Tried in order: the axis that
+// separated this pair last step (*cachedAxis, in A's frame, zero when none), the line
+// between the centres, then A's and B's own axes (side-by-side finger bones are apart along
+// their width, not along the diagonal between their centres). The axis that worked is kept.
+bool separatedBeyond(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
+                     const Pose& poseB, const Vec3& centreLine, float margin, Vec3* cachedAxis) {
+  auto separates = [&](Vec3 axis) {
+    const float len = axis.norm();
+    if (!(len > 1e-6f)) return false;
+    axis /= len;
+    if (axis.dot(centreLine) < 0.0f) axis = -axis;  // B lies on the positive side
+    if (separationAlong(a, poseA, b, poseB, axis) <= margin) return false;
+    if (cachedAxis) *cachedAxis = poseA.q.conjugate() * axis;
+    return true;
+  };
+  if (cachedAxis && separates(poseA.q * *cachedAxis)) return true;
+  if (separates(centreLine)) return true;
+  for (int k = 0; k < 3; ++k)
+    if (separates(poseA.q * Vec3::Unit(k)) || separates(poseB.q * Vec3::Unit(k))) return true;
+  if (cachedAxis) *cachedAxis = Vec3::Zero();
+  return false;
+}
+
 // MPR's direction follows the line between the two centres, so a small body against a large
 // box (a fingertip low on a wall, a block near the table's edge) can get the normal of the
 // wrong face and be pushed through. For a hull with few faces (boxes, walls, tables) its face
@@ -97,9 +122,11 @@ Vec3 leastPenetrationAxis(const ConvexShape& a, const Pose& poseA, const ConvexS
 }  // namespace
 
 int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b, const Pose& poseB,
-                  float margin, ManifoldPoint* points, Vec3* normal, bool faceAxes) {
+                  float margin, ManifoldPoint* points, Vec3* normal, bool faceAxes,
+                  Vec3* cachedAxis) {
   const CcdObject objA{&a, poseA, poseA.transform(a.centroid()), 0.5f * margin};
   const CcdObject objB{&b, poseB, poseB.transform(b.centroid()), 0.5f * margin};
+  if (separatedBeyond(a, poseA, b, poseB, objB.centre - objA.centre, margin, cachedAxis)) return 0;
   ccd_t ccd;
   CCD_INIT(&ccd);
   ccd.support1 = ccdSupport;
@@ -245,7 +272,7 @@ void World::buildContacts(float h) {
       const int count = collideConvex(
           shapes_[static_cast<std::size_t>(m.bodies[i].shape)], pose(static_cast<BodyId>(i)),
           shapes_[static_cast<std::size_t>(m.bodies[j].shape)], pose(static_cast<BodyId>(j)),
-          margin, manifold.data(), &nrm, againstStatic);
+          margin, manifold.data(), &nrm, againstStatic, &m.separatingAxis[i * n + j]);
       const auto key = static_cast<std::uint32_t>(i * n + j);
       while (cursor < s.contacts.size() && s.contacts[cursor].pair < key) ++cursor;
       for (int k = 0; k < count; ++k) {

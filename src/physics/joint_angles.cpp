@@ -11,10 +11,10 @@ Vec3 decomposeJointRotation(const Quat& relative) {
   const Vec3 d = q * Vec3::UnitX();
   const float flexion = std::atan2(d.y(), d.x());
   const float abduction = std::asin(std::clamp(-d.z(), -1.0f, 1.0f));
-  // Twist: what remains after undoing the shortest swing X -> d.
-  const Quat swing = Quat::FromTwoVectors(Vec3::UnitX(), d);
-  const Quat twist = swing.conjugate() * q;
-  float angle = 2.0f * std::atan2(twist.x(), twist.w());
+  // Twist: what remains after undoing the shortest swing X -> d. That swing's axis is
+  // perpendicular to X, so (swing^-1 q) has the w and x of q scaled by the same positive
+  // factor, and the twist angle can be read from q directly.
+  float angle = 2.0f * std::atan2(q.x(), q.w());
   if (angle > static_cast<float>(M_PI)) angle -= 2.0f * static_cast<float>(M_PI);
   if (angle <= -static_cast<float>(M_PI)) angle += 2.0f * static_cast<float>(M_PI);
   return {flexion, abduction, angle};

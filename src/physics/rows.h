@@ -68,6 +68,7 @@ struct RowBuilder {
     r.frictionOf = frictionOf;
     r.friction = friction;
     r.relax = relax;
+    r.angular = axis.isZero(0.0f);
     r.blockSize = 1;
     r.blockPasses = 1;
     r.store = nullptr;

@@ -65,8 +65,19 @@ inline void applyRowImpulse(std::vector<SolverBody>& sb, const Row& r, float d) 
 }
 
 inline void solveRow(std::vector<SolverBody>& sb, std::vector<Row>& rows, Row& r, bool useBias) {
-  const SolverBody& a = sb[static_cast<std::size_t>(r.slotA)];
-  const SolverBody& b = sb[static_cast<std::size_t>(r.slotB)];
+  SolverBody& a = sb[static_cast<std::size_t>(r.slotA)];
+  SolverBody& b = sb[static_cast<std::size_t>(r.slotB)];
+  if (r.angular) {  // joint limits, cones, joint drives: half the work of a general row
+    const float jv = r.angA.dot(a.w) + r.angB.dot(b.w);
+    const float target = useBias ? r.impulse - r.effMass * (jv + r.bias)
+                                 : r.impulse - r.effMass * (jv + r.relaxBias);
+    const float clamped = std::clamp(target, r.lower, r.upper);
+    const float d = clamped - r.impulse;
+    r.impulse = clamped;
+    a.w += d * r.invIAngA;
+    b.w += d * r.invIAngB;
+    return;
+  }
   const float jv = r.axis.dot(b.v - a.v) + r.angA.dot(a.w) + r.angB.dot(b.w);
   float lower = r.lower, upper = r.upper;
   if (r.frictionOf >= 0) {
@@ -125,24 +136,6 @@ void solvePointBlocks(std::vector<SolverBody>& sb, std::vector<World::Impl::Poin
     const Vec3 d = -(p.invK * (useBias ? Vec3(cdot + p.bias) : cdot));
     p.impulse += d;
     applyPointImpulse(sb, p, d);
-  }
-}
-
-void solveSurfaceRows(std::vector<SolverBody>& sb, World::Impl& m, SurfaceRows& rows,
-                      bool useBias) {
-  const std::size_t n = rows.body.size();
-  const float* bias = useBias ? m.surfBias.data() : m.surfRelaxBias.data();
-  for (std::size_t i = 0; i < n; ++i) {
-    SolverBody& b = sb[static_cast<std::size_t>(m.surfSlot[i])];
-    const Vec3& nrm = rows.normal[i];
-    const float jv = nrm.dot(b.v) + m.surfAng[i].dot(b.w);
-    const float old = rows.impulse[i];
-    const float clamped =
-        std::clamp(old - m.surfEffMass[i] * (jv + bias[i]), rows.lower[i], rows.upper[i]);
-    const float d = clamped - old;
-    rows.impulse[i] = clamped;
-    b.v += (m.surfInvMass[i] * d) * nrm;
-    b.w += d * m.surfInvIAng[i];
   }
 }
 
@@ -375,15 +368,13 @@ void World::step(float h) {
       Vec3 axes[3];
       axes[0] = Vec3(-d.z() * d.x(), -d.z() * d.y(), dxy2) / dxy2;
       axes[1] = Vec3(-d.y(), d.x(), 0.0f) / std::sqrt(dxy2);
-      // Twist has no simple closed-form rate under large swing: differentiate numerically
-      // (left-perturbation of the relative rotation by a small rotation about each axis).
-      constexpr float kEps = 1e-3f;
-      for (int k = 0; k < 3; ++k) {
-        const Quat nudge(Eigen::AngleAxisf(kEps, Vec3::Unit(k)));
-        float dt = decomposeJointRotation(nudge * rel).z() - angles.z();
-        if (dt > 3.14159265f) dt -= 6.2831853f;
-        if (dt < -3.14159265f) dt += 6.2831853f;
-        axes[2][k] = dt / kEps;
+      // Twist = 2 atan2(q.x, q.w) of the relative rotation (its swing has no x part), so under
+      // a small left rotation δ (dq = ½ (0, δ) q) its rate is
+      // (w² + x², w z + x y, x z - w y) / (w² + x²) · δ.
+      {
+        const float w = rel.w(), x = rel.x(), y = rel.y(), z = rel.z();
+        const float wx2 = std::max(w * w + x * x, 1e-12f);
+        axes[2] = Vec3(1.0f, (w * z + x * y) / wx2, (x * z - w * y) / wx2);
       }
       for (int k = 0; k < 3; ++k) {
         const Vec3 axisWorld = frameA * axes[k];
@@ -442,15 +433,9 @@ void World::step(float h) {
                              Vec3(store[0], store[1], store[2]), store});
   }
 
-  // Surface rows (SoA, one body each).
+  // Surface rows (one body each), packed four to a batch on different slots.
   const std::size_t surfCount = rows_.body.size();
-  m.surfSlot.resize(surfCount);
-  m.surfAng.resize(surfCount);
-  m.surfInvIAng.resize(surfCount);
-  m.surfInvMass.resize(surfCount);
-  m.surfEffMass.resize(surfCount);
-  m.surfBias.resize(surfCount);
-  m.surfRelaxBias.resize(surfCount);
+  m.surfaceRows.resize(surfCount);
   for (std::size_t i = 0; i < surfCount; ++i) {
     const auto body = static_cast<std::size_t>(rows_.body[i]);
     assert(body < n && "surface row: bad body");
@@ -465,15 +450,17 @@ void World::step(float h) {
     const float c = nrm.dot(world - rows_.target[i]);
     const Bias bias = rows_.lower[i] >= 0.0f ? oneSidedBias(c, settings_.surfaceErp, invH)
                                              : twoSidedBias(c, settings_.surfaceErp, invH);
-    m.surfSlot[i] = slot;
-    m.surfAng[i] = ang;
-    m.surfInvIAng[i] = invIAng;
-    m.surfInvMass[i] = b.invMass;
-    m.surfEffMass[i] = k > 0.0f ? 1.0f / k : 0.0f;
-    m.surfBias[i] = bias.solve;
-    m.surfRelaxBias[i] = bias.relax;
-    rows_.impulse[i] = 0.0f;
+    m.surfaceRows[i] = {slot,
+                        nrm,
+                        ang,
+                        invIAng,
+                        k > 0.0f ? 1.0f / k : 0.0f,
+                        bias.solve,
+                        bias.relax,
+                        rows_.lower[i],
+                        rows_.upper[i]};
   }
+  m.surfaceBatches.build(m.surfaceRows, static_cast<int>(slotCount), dummy);
 
   // --- Warm start, solve with bias, integrate positions, relax. ---
   for (const Row& r : m.rows) {
@@ -482,7 +469,7 @@ void World::step(float h) {
   for (const Impl::PointBlock& pb : m.pointBlocks)
     applyPointImpulse(m.solverBodies, pb, pb.impulse);
   for (int it = 0; it < settings_.iterations; ++it) {
-    solveSurfaceRows(m.solverBodies, m, rows_, true);
+    m.surfaceBatches.solve(m.solverBodies, true);
     solveRows(m.solverBodies, m.rows, true);
     solvePointBlocks(m.solverBodies, m.pointBlocks, true);
   }
@@ -503,7 +490,7 @@ void World::step(float h) {
   }
   projectJointPositions(m, settings_.positionIterations);
   for (int it = 0; it < settings_.relaxIterations; ++it) {
-    solveSurfaceRows(m.solverBodies, m, rows_, false);
+    m.surfaceBatches.solve(m.solverBodies, false);
     solveRows(m.solverBodies, m.rows, false);
     solvePointBlocks(m.solverBodies, m.pointBlocks, false);
   }
@@ -514,6 +501,7 @@ void World::step(float h) {
     for (int k = 0; k < 3; ++k) pb.store[k] = pb.impulse[k];
   }
   storeContactImpulses();
+  m.surfaceBatches.writeImpulses(rows_.impulse.data());
 
   // --- Write back: free bodies from their slots, welded members from their group. ---
   for (std::size_t i = 0; i < n; ++i) {

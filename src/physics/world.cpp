@@ -77,6 +77,7 @@ BodyId World::addBody(const BodyDef& def) {
     grown[i * n + oldCount] = grown[oldCount * n + i] = either ? 1 : 0;
   }
   impl_->collide = std::move(grown);
+  impl_->separatingAxis.assign(n * n, Vec3::Zero());
   return static_cast<BodyId>(oldCount);
 }
 
@@ -347,13 +348,8 @@ GroupId World::groupOf(BodyId b) const {
 void World::reserveRows(int maxRows) {
   rows_.reserve(maxRows);
   const auto n = static_cast<std::size_t>(maxRows);
-  impl_->surfSlot.reserve(n);
-  impl_->surfAng.reserve(n);
-  impl_->surfInvIAng.reserve(n);
-  impl_->surfInvMass.reserve(n);
-  impl_->surfEffMass.reserve(n);
-  impl_->surfBias.reserve(n);
-  impl_->surfRelaxBias.reserve(n);
+  impl_->surfaceRows.reserve(n);
+  impl_->surfaceBatches.reserve(maxRows);
 }
 
 void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, float margin) {

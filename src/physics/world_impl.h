@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "dynahand/physics_world.h"
+#include "physics/surface_batches.h"
 
 namespace dynahand::physics {
 
@@ -48,6 +49,7 @@ struct Row {
   int frictionOf;      // index of the normal row, or -1
   float friction;      // Coulomb coefficient when frictionOf >= 0
   bool relax;          // solved in the relax sweeps (motors are not)
+  bool angular;        // axis is zero: only the angular velocities take part (limits, cones)
   int blockSize;       // rows [this, this + blockSize) are iterated blockPasses times
   int blockPasses;
   float* store;  // where the impulse is kept for warm starting, or nullptr
@@ -99,7 +101,8 @@ struct ManifoldPoint {
 // take the one of least penetration when it beats MPR's direction (used against static
 // bodies: walls and tables, where MPR's centre-line direction can pick the wrong face).
 int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b, const Pose& poseB,
-                  float margin, ManifoldPoint* points, Vec3* normal, bool faceAxes = false);
+                  float margin, ManifoldPoint* points, Vec3* normal, bool faceAxes = false,
+                  Vec3* cachedAxis = nullptr);
 
 constexpr int kJointImpulses = 9;  // 3 point rows + (lower, upper) x 3 angles
 
@@ -108,6 +111,10 @@ struct World::Impl {
   std::vector<JointConfig> joints;
   std::vector<ConeConfig> cones;
   std::vector<std::uint8_t> collide;  // bodyCount x bodyCount, 1 when the pair may collide
+  // Per pair (bodyCount x bodyCount): the axis that last showed it apart, in the first body's
+  // frame (zero when none). Only saves work: the cull it feeds is exact, so results do not
+  // depend on it (and it is not part of WorldState).
+  std::vector<Vec3> separatingAxis;
 
   // Per-step scratch, sized at warm-up and reused.
   std::vector<SolverBody> solverBodies;  // slots: bodies, then groups, then the static dummy
@@ -133,14 +140,9 @@ struct World::Impl {
   std::vector<PointBlock> pointBlocks;
   std::vector<ContactPoint> contactView;
   std::vector<WorldState::CachedContact> newContacts;
-  // Prepared surface rows (parallel to SurfaceRows).
-  std::vector<int> surfSlot;
-  std::vector<Vec3> surfAng;      // r x n, m
-  std::vector<Vec3> surfInvIAng;  // I^-1 (r x n)
-  std::vector<float> surfInvMass;
-  std::vector<float> surfEffMass;
-  std::vector<float> surfBias;
-  std::vector<float> surfRelaxBias;
+  // Prepared surface rows (parallel to SurfaceRows), packed for the solver.
+  std::vector<PreparedSurfaceRow> surfaceRows;
+  SurfaceBatches surfaceBatches;
 
   int slotOf(const WorldState& s, BodyId b) const {
     const int g = s.group[static_cast<std::size_t>(b)];

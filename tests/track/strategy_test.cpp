@@ -80,7 +80,8 @@ float wronglyBentIndex(const TrackerSettings& settings, int frames) {
   const Pose root = test::facingCamera(hand, Vec3(0.0f, 0.0f, 0.40f));
   const model::ModelPose truth = posed(hand, openAngles(hand), root);
   model::JointAngles bent = openAngles(hand);
-  for (int j : {4, 5, 6}) bent.angles[static_cast<std::size_t>(j)].x() = 80.0f * kDeg;
+  // Curled fully into the palm (the joints' limits): its bones then lie on the palm's samples.
+  for (int j : {4, 5, 6}) bent.angles[static_cast<std::size_t>(j)].x() = 110.0f * kDeg;
   model::clampToLimits(hand, bent);
   auto tracker = Tracker::create(hand, camera.intrinsics(), settings);
   EXPECT_TRUE(tracker.ok());

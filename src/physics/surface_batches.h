@@ -1,0 +1,46 @@
+// Surface rows (one body each, the tracker's thousands of point-on-plane constraints) packed
+// four to a batch, the four on different solver slots, and solved four at a time with SSE.
+// Within a batch the rows touch different bodies, so solving them together is the same as
+// solving them one after another: still projected Gauss-Seidel, in batch order. Rows are
+// dealt into batches so that a slot's rows never share one (a slot with more rows than there
+// are batches gets batches of its own, padded with inert lanes).
+#pragma once
+
+#include <vector>
+
+#include "dynahand/core.h"
+
+namespace dynahand::physics {
+
+struct SolverBody;  // world_impl.h
+
+// One prepared surface row (see World::step): impulse increment d = -effMass (Jv + bias),
+// Jv = normal·v + ang·w, clamped to [lower, upper]; applies invMass d normal and d invIAng.
+struct PreparedSurfaceRow {
+  int slot;
+  Vec3 normal, ang, invIAng;
+  float effMass, bias, relaxBias, lower, upper;
+};
+
+class SurfaceBatches {
+ public:
+  // Packs the rows; `dummySlot` is a slot that never moves (padding lanes point at it).
+  void build(const std::vector<PreparedSurfaceRow>& rows, int slotCount, int dummySlot);
+  // One sweep over every row, with the position bias (solve) or the relax bias.
+  void solve(std::vector<SolverBody>& bodies, bool useBias);
+  // The accumulated impulse of every row, in the order given to build().
+  void writeImpulses(float* impulses) const;
+  void reserve(int rows);
+
+ private:
+  struct alignas(16) Batch {
+    int slot[4];
+    int row[4];  // index in build()'s input; -1 for padding
+    float nx[4], ny[4], nz[4], ax[4], ay[4], az[4], ix[4], iy[4], iz[4];
+    float effMass[4], bias[4], relaxBias[4], lower[4], upper[4], impulse[4];
+  };
+  std::vector<Batch> batches_;
+  std::vector<int> order_, count_, start_, slotsByCount_;
+};
+
+}  // namespace dynahand::physics

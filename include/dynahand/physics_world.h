@@ -114,6 +114,10 @@ struct SurfaceRows {
   // direction rayDir (free space in front of an observed depth point); push-only, <= cap.
   void addLineOfSight(BodyId b, const Vec3& anchorLocal, const Vec3& rayDir,
                       const Vec3& targetWorld, float cap);
+  // Half-space: the body point must stay on the side of the target plane that the unit
+  // normal points to (normal·(p - target) >= 0); push-only, <= cap.
+  void addHalfSpace(BodyId b, const Vec3& anchorLocal, const Vec3& normalWorld,
+                    const Vec3& targetWorld, float cap);
 };
 
 // Every mutable quantity of a world: poses, velocities, weld groups, warm-start impulses and

@@ -44,6 +44,10 @@ struct TrackerSettings {
   // the arm's sides cannot say where along the arm it is, so without this the hand slides
   // along the arm when the fingers curl over the palm. Capped, so the hand's data wins.
   float forearmHoldForce = 1000.0f;  // N
+  // A model fingertip over pixels the camera sees as empty (background farther than it, or
+  // no data) is pushed towards the nearest segmented pixel with at most this force (N);
+  // 0 = off. Beyond the paper, whose metric only scores such a tip.
+  float silhouetteForce = 100.0f;
   // Lost when the winner's error per body stays above this (m) for lostAfterFrames
   // frames, or when the hand leaves the view.
   float lostErrorPerBodyM = 0.02f;

@@ -67,6 +67,7 @@ Result<HandRig> HandRig::create(const model::ArticulatedModel& model,
         return Error{"degenerate bone axis on body " +
                      model.bodies()[static_cast<std::size_t>(body)].name};
       a.boneAxis[static_cast<std::size_t>(body)] = (to - from).normalized();
+      if (k == 2) a.tipLocal[static_cast<std::size_t>(f)] = to;
     }
   }
 

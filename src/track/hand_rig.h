@@ -31,6 +31,8 @@ struct HandAnatomy {
   // joint or keypoint tip.
   std::vector<Vec3> boneAxis;
   std::vector<int> jointOfBody;  // joint whose child is the body, -1 for the root
+  // Per finger, its tip keypoint in the distal body's frame, m.
+  std::array<Vec3, kFingerCount> tipLocal{};
   // Forearm axis in the forearm's body frame, unit, from the wrist toward the elbow. The
   // forearm is cut off (by the image or by segmentation), so its elbow-side end is no
   // surface: samples there must not pull it (see Simulator).

@@ -26,6 +26,7 @@ SimulationSettings simulationSettings(const TrackerSettings& s) {
   sim.stepDt = s.stepDt;
   sim.pullForce = s.pullForce;
   sim.boundaryForce = s.boundaryForce;
+  sim.silhouetteForce = s.silhouetteForce;
   return sim;
 }
 

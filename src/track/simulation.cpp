@@ -2,10 +2,16 @@
 
 #include <algorithm>
 
+#include "track/silhouette.h"
+
 namespace dynahand::track {
 
 namespace {
 constexpr float kCutEndCos = 0.5f;  // forearm faces within 60 degrees of the elbow direction
+// Fingertips within this many pixels of the mask are on the hand; farther than the search
+// radius, the fit is too far off for a pull in the image plane to mean anything.
+constexpr int kTipOnHandPixels = 1;
+constexpr int kTipSearchPixels = 40;
 }  // namespace
 
 void Simulator::pose(const HandRig& rig, PosedBodies& bodies) {
@@ -54,6 +60,17 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
     attach(input.points[i], kAllBodies, cap, false, &hints_[i]);
   for (const LabelledPoint& l : input.labelled)
     attach(l.point, l.bodies, cap * l.capScale, true, nullptr);
+
+  if (input.cloud != nullptr && settings_.silhouetteForce > 0.0f) {
+    const float tipCap = settings_.silhouetteForce * settings_.stepDt;
+    for (int f = 0; f < kFingerCount; ++f) {
+      const int body = rig.anatomy().fingers[static_cast<std::size_t>(f)][2];
+      const Vec3& local = rig.anatomy().tipLocal[static_cast<std::size_t>(f)];
+      const auto pull = silhouettePull(*input.cloud, bodies_.pose(body).transform(local),
+                                       kTipOnHandPixels, kTipSearchPixels);
+      if (pull) rows.addHalfSpace(body, local, pull->inward, pull->target, tipCap);
+    }
+  }
 
   if (input.hold != nullptr) {
     const AxisHold& h = *input.hold;

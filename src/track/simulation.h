@@ -25,6 +25,9 @@ struct SimulationSettings {
   float boundaryMargin = 0.02f;  // planes farther than this from a body add no row (m)
   // Points farther than this from every body make no row: they belong to something else.
   float maxAttachDistance = 0.06f;
+  // Fingertips over empty space are pushed towards the nearest segmented pixel
+  // (track/silhouette.h) with at most this force (N); 0 = off.
+  float silhouetteForce = 100.0f;
 };
 
 // A sample point bound to a set of bodies ("this point is on some fingertip").

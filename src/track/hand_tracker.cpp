@@ -111,6 +111,7 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
 
 void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   auto& world = rig_.world();
+  simulator_.beginFrame();
   world.saveState(start_);
   rig_.readPose(pose_);
   const int forearm = rig_.anatomy().forearm;
@@ -197,6 +198,7 @@ model::ModelPose HandTracker::canonicalPose(const HandFrame& frame, const Vec2& 
 
 void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   auto& world = rig_.world();
+  simulator_.beginFrame();
   Vec2 axis(0.0f, -1.0f);
   if (frame.cloud != nullptr && frame.cloud->segment.armDirectionImage.norm() > 0.5f) {
     axis = -frame.cloud->segment.armDirectionImage.normalized();

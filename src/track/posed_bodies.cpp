@@ -46,7 +46,8 @@ void PosedBodies::setPose(int body, const Pose& pose) {
   centroids_[i] = pose.transform(shapes_[i]->centroid());
 }
 
-float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face) {
+float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
+                                    float stopAbove) {
   // Eight independent lanes (maximum and its face per lane) so the compiler vectorises
   // the loop without reassociating floats; the lanes are reduced at the end.
   const std::size_t n = t.offset.size();
@@ -62,13 +63,17 @@ float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* fac
     index[k] = 0;
   }
   for (std::size_t f = 0; f < n; f += 8) {
+    bool above = false;
     for (int k = 0; k < 8; ++k) {
       const std::size_t i = f + static_cast<std::size_t>(k);
       const float d = nx[i] * qx + ny[i] * qy + nz[i] * qz - o[i];
       const bool better = d > best[k];
       best[k] = better ? d : best[k];
       index[k] = better ? static_cast<int>(i) : index[k];
+      above |= d > stopAbove;
     }
+    // The caller only needs to know the distance exceeds stopAbove: any plane says so.
+    if (above) break;
   }
   float result = best[0];
   int which = index[0];
@@ -107,7 +112,9 @@ SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) co
     const auto bi = static_cast<std::size_t>(i);
     const Vec3 local = poses_[bi].inverseTransform(p);
     int face = 0;
-    const float sd = maxPlaneDistance(planes_[bi], local, &face);
+    // A body farther than the best so far cannot win: stop its planes early.
+    const float sd = maxPlaneDistance(planes_[bi], local, &face, best.distance);
+    if (sd > best.distance) return;
     // Outside, the bounding-sphere bound is also a lower bound on the exact distance; taking
     // the larger keeps the sphere culling below consistent (the answer is order-free).
     const float d = sd < 0.0f ? -sd : std::max(sd, (p - centroids_[bi]).norm() - radii_[bi]);
@@ -140,7 +147,8 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
     const Vec3 local = pose.inverseTransform(p);
     int planeFace = 0;
     // Outside, the exact distance is at least the largest plane distance.
-    if (maxPlaneDistance(planes_[static_cast<std::size_t>(i)], local, &planeFace) > best.distance)
+    if (maxPlaneDistance(planes_[static_cast<std::size_t>(i)], local, &planeFace, best.distance) >
+        best.distance)
       continue;
     Vec3 closest;
     int face = -1;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -58,8 +59,10 @@ class PosedBodies {
   struct PlaneTable {
     std::vector<float> nx, ny, nz, offset;
   };
-  // Largest plane distance of local point q and its face.
-  static float maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face);
+  // Largest plane distance of local point q and its face; returns early with some
+  // distance > stopAbove (not the largest) once one plane is farther than that.
+  static float maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
+                                float stopAbove = std::numeric_limits<float>::infinity());
   int sortedBounds(const Vec3& p, BodyMask mask, std::pair<float, int>* order) const;
 
   std::vector<const physics::ConvexShape*> shapes_;

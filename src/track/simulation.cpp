@@ -12,6 +12,10 @@ constexpr float kCutEndCos = 0.5f;  // forearm faces within 60 degrees of the el
 // radius, the fit is too far off for a pull in the image plane to mean anything.
 constexpr int kTipOnHandPixels = 1;
 constexpr int kTipSearchPixels = 40;
+bool samePose(const Pose& a, const Pose& b) {
+  return a.p == b.p && a.q.coeffs() == b.q.coeffs();
+}
+
 }  // namespace
 
 void Simulator::pose(const HandRig& rig, PosedBodies& bodies) {
@@ -26,6 +30,12 @@ void Simulator::pose(const HandRig& rig, PosedBodies& bodies) {
   bodies.set(shapes_, poses_);
 }
 
+void Simulator::beginFrame() {
+  frameStart_.clear();
+  frameStartPoses_.clear();
+  frameStartPoints_ = nullptr;
+}
+
 void Simulator::addRows(HandRig& rig, const FrameInput& input) {
   auto& world = rig.world();
   auto& rows = world.rows();
@@ -38,28 +48,55 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
   hints_.resize(input.points.size(), -1);
   const int forearm = rig.anatomy().forearm;
   const Vec3 forearmAxis = rig.anatomy().forearmAxis;
-  auto attach = [&](const Vec3& p, BodyMask mask, float rowCap, bool anyDistance, int* hint) {
+  auto map = [&](const Vec3& p, BodyMask mask, bool anyDistance, int* hint) {
+    Attachment a;
     const SurfaceHit hit = bodies_.nearestPlanar(p, mask, hint ? *hint : -1);
     if (hint) *hint = hit.body;
-    if (hit.body < 0 || (!anyDistance && hit.distance > settings_.maxAttachDistance)) return;
+    if (hit.body < 0 || (!anyDistance && hit.distance > settings_.maxAttachDistance)) return a;
     const Pose& pose = bodies_.pose(hit.body);
     const Vec3& localNormal =
         bodies_.shape(hit.body).faces()[static_cast<std::size_t>(hit.face)].normal;
     // The forearm's elbow-side end is where the arm was cut off, not a surface.
-    if (hit.body == forearm && localNormal.dot(forearmAxis) > kCutEndCos) return;
-    const Vec3 normal = pose.rotate(localNormal);
+    if (hit.body == forearm && localNormal.dot(forearmAxis) > kCutEndCos) return a;
+    a.body = hit.body;
+    a.localPoint = hit.localPoint;
+    a.normal = pose.rotate(localNormal);
+    return a;
+  };
+  auto attach = [&](const Attachment& a, const Vec3& p, float rowCap) {
+    if (a.body < 0) return;
     // A face turned away from the camera cannot have produced this sample: the body
     // must instead lie behind it along the camera ray (free space in front of p).
-    if (normal.dot(p) > 0.0f) {
-      rows.addLineOfSight(hit.body, hit.localPoint, p.normalized(), p, rowCap);
+    if (a.normal.dot(p) > 0.0f) {
+      rows.addLineOfSight(a.body, a.localPoint, p.normalized(), p, rowCap);
     } else {
-      rows.addSurface(hit.body, hit.localPoint, normal, p, rowCap);
+      rows.addSurface(a.body, a.localPoint, a.normal, p, rowCap);
     }
   };
-  for (std::size_t i = 0; i < input.points.size(); ++i)
-    attach(input.points[i], kAllBodies, cap, false, &hints_[i]);
+  // Every simulation of a frame starts from the same state, so the first substep's mapping
+  // is the same for all of them: computed once (poses compared bit for bit).
+  const bool sameAsFrameStart = !frameStart_.empty() && frameStartPoints_ == input.points.data() &&
+                                frameStart_.size() == input.points.size() &&
+                                std::equal(poses_.begin(), poses_.end(), frameStartPoses_.begin(),
+                                           frameStartPoses_.end(), samePose);
+  if (sameAsFrameStart) {
+    for (std::size_t i = 0; i < input.points.size(); ++i)
+      attach(frameStart_[i], input.points[i], cap);
+  } else {
+    const bool keep = frameStart_.empty() && frameStartPoints_ == nullptr;
+    attachments_.resize(input.points.size());
+    for (std::size_t i = 0; i < input.points.size(); ++i) {
+      attachments_[i] = map(input.points[i], kAllBodies, false, &hints_[i]);
+      attach(attachments_[i], input.points[i], cap);
+    }
+    if (keep) {
+      frameStart_ = attachments_;
+      frameStartPoses_ = poses_;
+      frameStartPoints_ = input.points.data();
+    }
+  }
   for (const LabelledPoint& l : input.labelled)
-    attach(l.point, l.bodies, cap * l.capScale, true, nullptr);
+    attach(map(l.point, l.bodies, true, nullptr), l.point, cap * l.capScale);
 
   if (input.cloud != nullptr && settings_.silhouetteForce > 0.0f) {
     const float tipCap = settings_.silhouetteForce * settings_.stepDt;

@@ -60,6 +60,10 @@ class Simulator {
   explicit Simulator(const SimulationSettings& settings) : settings_(settings) {}
   const SimulationSettings& settings() const { return settings_; }
 
+  // A new frame: forgets the first mapping kept for the frame's simulations (the first
+  // mapping after this call is kept and reused by any later substep starting from the same
+  // poses on the same points).
+  void beginFrame();
   // Runs `substeps` physics steps of the rig on the frame's data.
   void run(HandRig& rig, const FrameInput& input, int substeps);
   // Refreshes `bodies` from the rig's current poses.
@@ -73,6 +77,16 @@ class Simulator {
   std::vector<const physics::ConvexShape*> shapes_;
   std::vector<Pose> poses_;
   std::vector<int> hints_;  // (points) body each point attached to last pass
+  // Where a sample point attaches: a body (-1: none), the face point and its world normal.
+  struct Attachment {
+    int body = -1;
+    Vec3 localPoint = Vec3::Zero();
+    Vec3 normal = Vec3::Zero();
+  };
+  std::vector<Attachment> attachments_;
+  std::vector<Attachment> frameStart_;  // the frame's first mapping (see beginFrame)
+  std::vector<Pose> frameStartPoses_;
+  const Vec3* frameStartPoints_ = nullptr;
 };
 
 }  // namespace dynahand::track

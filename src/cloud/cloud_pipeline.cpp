@@ -1,9 +1,11 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "cloud/depth_filter.h"
+#include "cloud/limb_end.h"
 #include "cloud/region_grow.h"
 #include "dynahand/cloud.h"
 
@@ -18,6 +20,12 @@ namespace {
 constexpr float kCoarseRadiusFactor = 1.1f;
 constexpr int kMaxBoxRetries = 2;
 constexpr int kCandidateRounds = 3;
+// A limb is explored this many hand radii around its nearest point: far enough to see the
+// forearm leave toward the body and the hand end free.
+constexpr float kLimbRadiusFactor = 2.0f;
+// A ball moved toward a limb's free end stops with the end this far (in hand radii) from
+// its centre.
+constexpr float kEndInsideBall = 0.75f;
 
 // Nearest integer for x >= -0.5 (pixel coordinates), without a libm call.
 int roundToInt(float x) {
@@ -41,6 +49,7 @@ struct CloudPipeline::Impl {
   cloud::FilterScratch filterScratch;
   cloud::RegionGrower coarseGrower;
   cloud::RegionGrower fineGrower;
+  cloud::LimbEndFinder limbEnd;
   std::vector<float> coarseDepth;        // (coarse height x coarse width), m
   std::vector<std::uint8_t> coarseNear;  // coarse labels dilated by one cell
   std::vector<int> boxColumnCell;        // (box width) coarse column of each box column
@@ -61,8 +70,24 @@ struct CloudPipeline::Impl {
            grid.originU + r.maxI * grid.step >= k.width - margin ||
            grid.originV + r.maxJ * grid.step >= k.height - margin;
   }
+  // The free end (m) of the limb that the coarse volume r, grown from seed, belongs to
+  // (LimbEndFinder); false when r is no limb attached to the body.
+  bool findLimbEnd(const DepthGrid& grid, int seed, const GrownRegion& r, Vec3& end);
   Status run(const DepthFrame& frame, CloudFrame& out);
 };
+
+bool CloudPipeline::Impl::findLimbEnd(const DepthGrid& grid, int seed, const GrownRegion& r,
+                                      Vec3& end) {
+  const SegmentationConfig& seg = config.segmentation;
+  const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
+  // More than half the ball's cross-section is a body, not a limb (as in RegionGrower::grow).
+  if (r.areaM2 > 0.5f * std::numbers::pi_v<float> * coarseRadius * coarseRadius) return false;
+  const int cell = limbEnd.find(grid, k, seed, seg.step, kLimbRadiusFactor * seg.handRadiusM,
+                                seg.borderMarginPixels);
+  if (cell < 0) return false;
+  end = grid.point(k, cell % grid.width, cell / grid.width);
+  return true;
+}
 
 CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& config)
     : impl_(std::make_unique<Impl>(intrinsics, config)) {
@@ -79,6 +104,7 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
                            static_cast<std::size_t>(intrinsics.height / impl_->coarseStep + 1);
   impl_->filterScratch.reserve(pixels);
   impl_->coarseGrower.reserve(coarseCells, intrinsics.width, intrinsics.height);
+  impl_->limbEnd.reserve(coarseCells);
   impl_->fineGrower.reserve(pixels, intrinsics.width, intrinsics.height);
   impl_->coarseDepth.reserve(coarseCells);
   impl_->coarseNear.reserve(coarseCells);
@@ -197,6 +223,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
     // SegmentationConfig::borderMarginPixels), and used when nothing better follows.
     int borderSeed = -1;
     float borderDepth = 0.0f;
+    int firstSeed = -1;
     int attempts = 0;
     while (regionCount == 0 && attempts++ < seg.maxSeedAttempts) {
       const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
@@ -215,15 +242,19 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       }
       coarseGrower.accept(cloud::kRegion1);
       first = r;
+      firstSeed = seed;
       regionCount = 1;
     }
     if (regionCount == 0 && borderSeed >= 0) {
       coarseGrower.reset(coarse, k);  // forget the passed-over labels
       first = coarseGrower.grow(borderSeed, seg.step, coarseRadius, seg.minAreaM2);
       coarseGrower.accept(cloud::kRegion1);
+      firstSeed = borderSeed;
       regionCount = 1;
     }
     if (regionCount == 0) return Ok{};  // no hand: valid, empty
+    Vec3 handEnd = Vec3::Zero();
+    const bool haveHandEnd = findLimbEnd(coarse, firstSeed, first, handEnd);
     int minI = first.minI, maxI = first.maxI, minJ = first.minJ, maxJ = first.maxJ;
     if (seg.secondRegionDepthBandM > 0.0f) {
       attempts = 0;
@@ -331,7 +362,18 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
                                             : coarseLabel == cloud::kRegion2;
           });
           if (seed < 0) break;
-          const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
+          GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
+          const Vec3 toNearest = g.nearestPoint - handEnd;
+          if (r == 0 && haveHandEnd && toNearest.norm() > seg.handRadiusM) {
+            // The ball around the nearest sample leaves out the limb's free end: that sample
+            // is on a forearm pointing at the camera. The ball moves toward the free end
+            // until it holds it with a quarter radius to spare.
+            const Vec3 centre =
+                handEnd + toNearest.normalized() * (kEndInsideBall * seg.handRadiusM);
+            const int endSeed = fineGrower.closestFreeCell(centre);
+            if (endSeed >= 0)
+              g = fineGrower.grow(endSeed, seg.step, seg.handRadiusM, seg.minAreaM2);
+          }
           if (g.areaM2 >= seg.minAreaM2 && !g.inFrontOfSurface) {
             fineGrower.accept(static_cast<CellLabel>(label));
             fineRegion[r] = g;

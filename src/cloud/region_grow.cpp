@@ -73,6 +73,27 @@ int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
   return best;
 }
 
+int RegionGrower::closestFreeCell(const Vec3& p) const {
+  int best = -1;
+  float bestDistance2 = std::numeric_limits<float>::infinity();
+  for (int j = 0; j < grid_.height; ++j) {
+    const std::size_t row = static_cast<std::size_t>(j) * grid_.width;
+    const float* depth = grid_.depth + row;
+    for (int i = 0; i < grid_.width; ++i) {
+      const float z = depth[i];
+      if (z == 0.0f || labels_[row + i] != kFree) continue;
+      const Vec3 q(columnX_[static_cast<std::size_t>(i)] * z,
+                   rowY_[static_cast<std::size_t>(j)] * z, z);
+      const float d2 = (q - p).squaredNorm();
+      if (d2 < bestDistance2) {
+        bestDistance2 = d2;
+        best = static_cast<int>(row + static_cast<std::size_t>(i));
+      }
+    }
+  }
+  return best;
+}
+
 namespace {
 // Largest depth step between two surfaces of one hand (m): a fist's fingers stand up to
 // about this far in front of the palm, and fingers pointing at the camera this far in

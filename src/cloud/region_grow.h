@@ -66,6 +66,8 @@ class RegionGrower {
   // that depth; with avoidCentre set, only cells farther than avoidRadiusM from it.
   int nearestFreeCell(float maxDepthM = 0.0f, const Vec3* avoidCentre = nullptr,
                       float avoidRadiusM = 0.0f) const;
+  // The valid kFree cell whose point is closest to p (m), or -1.
+  int closestFreeCell(const Vec3& p) const;
   // Nearest valid kFree cell (i, j) for which allowed(i, j) is true, or -1. The
   // predicate is only asked about cells nearer than the best so far (rarely).
   template <class Allowed>

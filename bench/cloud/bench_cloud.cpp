@@ -109,6 +109,20 @@ void runPipeline(benchmark::State& state, const Clip& clip, const CloudConfig& c
       benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
 }
 
+CloudConfig withGrowStep2() {
+  CloudConfig config;
+  config.segmentation.growStep = 2;
+  return config;
+}
+void BM_Cloud_Synthetic320x240_GrowStep2(benchmark::State& state) {
+  static const Clip clip = syntheticClip(320, 240);
+  runPipeline(state, clip, withGrowStep2());
+}
+void BM_Cloud_Sr305_320x240_GrowStep2(benchmark::State& state) {
+  static const Clip clip = sr305Clip(true);
+  runPipeline(state, clip, withGrowStep2());
+}
+
 CloudConfig withBilateral() {
   CloudConfig config;
   config.filter.bilateral = true;
@@ -141,6 +155,8 @@ void BM_Cloud_Sr305_320x240_Bilateral(benchmark::State& state) {
 }
 
 BENCHMARK(BM_Cloud_Synthetic640x480)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Cloud_Synthetic320x240_GrowStep2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Cloud_Sr305_320x240_GrowStep2)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cloud_Synthetic320x240)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cloud_Sr305_640x480)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cloud_Sr305_320x240)->Unit(benchmark::kMicrosecond);

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "cloud/depth_filter.h"
 
@@ -12,11 +11,13 @@ namespace {
 enum CellState : std::uint8_t { kUnseen = 0, kSurface = 1, kAttachment = 2 };
 }  // namespace
 
-void LimbEndFinder::reserve(std::size_t cells) {
-  distance_.reserve(cells);
+void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
+  columnX_.reserve(static_cast<std::size_t>(maxWidth));
+  rowY_.reserve(static_cast<std::size_t>(maxHeight));
+  steps_.reserve(cells);
   state_.reserve(cells);
   cells_.reserve(cells);
-  heap_.reserve(5 * cells);  // attachments + at most four relaxations per cell
+  queue_.reserve(cells);
 }
 
 int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
@@ -25,9 +26,9 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
   const int h = grid.height;
   const auto cellCount = static_cast<std::size_t>(w) * h;
   state_.assign(cellCount, kUnseen);
-  distance_.assign(cellCount, std::numeric_limits<float>::infinity());
+  steps_.assign(cellCount, -1);
   cells_.clear();
-  heap_.clear();
+  queue_.clear();
   const float* depth = grid.depth;
   const auto step = static_cast<float>(grid.step);
   const float spacingX = step / k.fx;
@@ -43,31 +44,48 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
     return u < borderMarginPixels || v < borderMarginPixels || u >= k.width - borderMarginPixels ||
            v >= k.height - borderMarginPixels;
   };
+  // Normalised image coordinates of each column / row: x = columnX[i] * z.
+  columnX_.resize(static_cast<std::size_t>(w));
+  rowY_.resize(static_cast<std::size_t>(h));
+  for (int i = 0; i < w; ++i) {
+    columnX_[static_cast<std::size_t>(i)] =
+        (static_cast<float>(grid.originU + i * grid.step) - k.cx) / k.fx;
+  }
+  for (int j = 0; j < h; ++j) {
+    rowY_[static_cast<std::size_t>(j)] =
+        (static_cast<float>(grid.originV + j * grid.step) - k.cy) / k.fy;
+  }
+  const auto point = [&](int i, int j, float z) {
+    return Vec3(columnX_[static_cast<std::size_t>(i)] * z, rowY_[static_cast<std::size_t>(j)] * z,
+                z);
+  };
   const int seedI = seed % w;
   const int seedJ = seed / w;
-  const Vec3 centre = grid.point(k, seedI, seedJ);
+  const Vec3 centre = point(seedI, seedJ, depth[seed]);
   const float radius2 = limbRadiusM * limbRadiusM;
+  // Cells are queued as packed coordinates (j << 16 | i): no division per cell.
+  const auto pack = [](int i, int j) { return (j << 16) | i; };
 
   // 1. The connected surface inside the ball; attachments where it leaves the ball or
   //    the image.
   state_[static_cast<std::size_t>(seed)] = kSurface;
-  cells_.push_back(seed);
+  cells_.push_back(pack(seedI, seedJ));
   bool attached = false;
   for (std::size_t q = 0; q < cells_.size(); ++q) {
-    const int c = cells_[q];
-    const int i = c % w;
-    const int j = c / w;
+    const int i = cells_[q] & 0xffff;
+    const int j = cells_[q] >> 16;
+    const int c = j * w + i;
     const float z = depth[c];
     bool leaves = atBorder(i, j);
     const auto visit = [&](int n, int ni, int nj, float spacing) {
       const auto un = static_cast<std::size_t>(n);
       if (state_[un] != kUnseen || depth[n] == 0.0f || !joined(z, depth[n], spacing)) return;
-      if ((grid.point(k, ni, nj) - centre).squaredNorm() > radius2) {
+      if ((point(ni, nj, depth[n]) - centre).squaredNorm() > radius2) {
         leaves = true;
         return;
       }
       state_[un] = kSurface;
-      cells_.push_back(n);
+      cells_.push_back(pack(ni, nj));
     };
     if (i > 0) visit(c - 1, i - 1, j, spacingX);
     if (i + 1 < w) visit(c + 1, i + 1, j, spacingX);
@@ -75,49 +93,39 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
     if (j + 1 < h) visit(c + w, i, j + 1, spacingY);
     if (leaves) {
       state_[static_cast<std::size_t>(c)] = kAttachment;
-      distance_[static_cast<std::size_t>(c)] = 0.0f;
-      heap_.push_back({0.0f, c});
+      steps_[static_cast<std::size_t>(c)] = 0;
+      queue_.push_back(cells_[q]);
       attached = true;
     }
   }
   if (!attached) return -1;
 
-  // 2. Distance along the surface from the nearest attachment (Dijkstra, 3D steps).
-  const auto later = [](const HeapEntry& a, const HeapEntry& b) {
-    return a.distance > b.distance || (a.distance == b.distance && a.cell > b.cell);
-  };
-  std::make_heap(heap_.begin(), heap_.end(), later);
-  while (!heap_.empty()) {
-    std::pop_heap(heap_.begin(), heap_.end(), later);
-    const HeapEntry top = heap_.back();
-    heap_.pop_back();
-    const auto uc = static_cast<std::size_t>(top.cell);
-    if (top.distance > distance_[uc]) continue;  // a stale entry
-    const int i = top.cell % w;
-    const int j = top.cell / w;
-    const float z = depth[uc];
-    const Vec3 p = grid.point(k, i, j);
+  // 2. Steps along the surface from the nearest attachment (breadth-first from all of them).
+  for (std::size_t q = 0; q < queue_.size(); ++q) {
+    const int i = queue_[q] & 0xffff;
+    const int j = queue_[q] >> 16;
+    const int c = j * w + i;
+    const float z = depth[c];
+    const int next = steps_[static_cast<std::size_t>(c)] + 1;
     const auto relax = [&](int n, int ni, int nj, float spacing) {
       const auto un = static_cast<std::size_t>(n);
-      if (state_[un] == kUnseen || !joined(z, depth[n], spacing)) return;
-      const float d = top.distance + (grid.point(k, ni, nj) - p).norm();
-      if (d >= distance_[un]) return;
-      distance_[un] = d;
-      heap_.push_back({d, n});
-      std::push_heap(heap_.begin(), heap_.end(), later);
+      if (state_[un] == kUnseen || steps_[un] >= 0 || !joined(z, depth[n], spacing)) return;
+      steps_[un] = next;
+      queue_.push_back(pack(ni, nj));
     };
-    if (i > 0) relax(top.cell - 1, i - 1, j, spacingX);
-    if (i + 1 < w) relax(top.cell + 1, i + 1, j, spacingX);
-    if (j > 0) relax(top.cell - w, i, j - 1, spacingY);
-    if (j + 1 < h) relax(top.cell + w, i, j + 1, spacingY);
+    if (i > 0) relax(c - 1, i - 1, j, spacingX);
+    if (i + 1 < w) relax(c + 1, i + 1, j, spacingX);
+    if (j > 0) relax(c - w, i, j - 1, spacingY);
+    if (j + 1 < h) relax(c + w, i, j + 1, spacingY);
   }
 
   // 3. The farthest reachable cell (first in discovery order on ties: deterministic).
   int end = -1;
-  float farthest = -1.0f;
-  for (const std::int32_t c : cells_) {
-    const float d = distance_[static_cast<std::size_t>(c)];
-    if (std::isfinite(d) && d > farthest) {
+  int farthest = -1;
+  for (const std::int32_t packed : cells_) {
+    const int c = (packed >> 16) * w + (packed & 0xffff);
+    const int d = steps_[static_cast<std::size_t>(c)];
+    if (d > farthest) {
       farthest = d;
       end = c;
     }

@@ -18,7 +18,7 @@ namespace dynahand::cloud {
 
 class LimbEndFinder {
  public:
-  void reserve(std::size_t cells);
+  void reserve(std::size_t cells, int maxWidth, int maxHeight);
 
   // Explores the surface connected to `seed` (neighbours within the step rule) inside a
   // ball of limbRadiusM around the seed's point. Its attachments are the connected cells beyond the
@@ -29,14 +29,13 @@ class LimbEndFinder {
            float limbRadiusM, int borderMarginPixels);
 
  private:
-  std::vector<float> distance_;      // (cells) along the surface from an attachment, m
+  std::vector<int> steps_;           // (cells) steps along the surface from an attachment, -1
   std::vector<std::uint8_t> state_;  // (cells) 0 = unseen, 1 = on the surface, 2 = attachment
+  // Packed cells (j << 16 | i):
   std::vector<std::int32_t> cells_;  // the surface's cells in discovery order
-  struct HeapEntry {
-    float distance;
-    std::int32_t cell;
-  };
-  std::vector<HeapEntry> heap_;
+  std::vector<std::int32_t> queue_;  // breadth-first order from the attachments
+  std::vector<float> columnX_;       // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;          // (height) (v - cy) / fy of each row
 };
 
 }  // namespace dynahand::cloud

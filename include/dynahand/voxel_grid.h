@@ -9,6 +9,7 @@
 // gives a fixed output order (deterministic).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -29,7 +30,46 @@ class VoxelGrid {
   // Adds one point (m). tag is carried along for the first point of each voxel (the
   // pipeline passes the source pixel index). Returns false when dropped: voxel table
   // full, non-finite point, or a coordinate beyond +-kMaxAbsCoordinate voxels.
-  bool add(const Vec3& point, std::int32_t tag = -1);
+  bool add(const Vec3& point, std::int32_t tag = -1) {
+    Run run = beginRun(keyOf(point), tag);
+    addToRun(run, point);
+    endRun(run);
+    return run.voxel >= 0;
+  }
+
+  // The voxel holding a point, as packed integer coordinates; kInvalidKey for a point that
+  // add() drops (non-finite, or a coordinate beyond +-kMaxAbsCoordinate voxels).
+  using Key = std::uint64_t;
+  static constexpr Key kInvalidKey = ~Key{0};
+  Key keyOf(const Vec3& point) const;
+  // keyOf() of the n points (xPerZ[i] * z[i], yPerZ * z[i], z[i]) (an image row: x / z per
+  // column, y / z of the row, depth in m), without branches so that it vectorises. Every
+  // coordinate must be finite and within +-kMaxAbsCoordinate voxels (inRange()).
+  void keysOfRow(const float* xPerZ, float yPerZ, const float* z, int n, Key* keys) const;
+  // True when every coordinate up to maxAbsM (m) is in the key range.
+  bool inRange(float maxAbsM) const {
+    return maxAbsM * inverseVoxelSize_ < static_cast<float>(kMaxAbsCoordinate);
+  }
+  // Points of one voxel met one after another (along an image row): the voxel is looked up
+  // once, beginRun(); addToRun() per point sums in registers; endRun() stores. The same
+  // result as add() per point, bit for bit (same sums in the same order). tag as for add();
+  // `hint` is a voxel index that may hold key (e.g. the voxel of the pixel above), checked
+  // before the table. Nothing else may add to the grid between beginRun and endRun.
+  struct Run {
+    int voxel = -1;  // -1: the run's points are dropped (table full, or kInvalidKey)
+    Key key = kInvalidKey;
+    Vec3 corner = Vec3::Zero();  // the voxel's lower corner, m
+    Vec3 sum = Vec3::Zero();     // the voxel's coordinate sum relative to corner, m
+    int count = 0;               // the voxel's points so far
+    int added = 0;               // points added by this run
+  };
+  Run beginRun(Key key, std::int32_t tag = -1, int hint = -1);
+  static void addToRun(Run& run, const Vec3& point) {
+    run.sum += point - run.corner;
+    ++run.count;
+    ++run.added;
+  }
+  void endRun(const Run& run);
 
   int voxelCount() const { return voxelCount_; }
   int droppedPoints() const { return droppedPoints_; }
@@ -45,6 +85,7 @@ class VoxelGrid {
 
   // Voxel coordinates are kept within +-2^20 so a key packs into 63 bits.
   static constexpr std::int32_t kMaxAbsCoordinate = (1 << 20) - 1;
+  static constexpr int kKeyFieldBits = 21;  // per coordinate, offset by kMaxAbsCoordinate + 1
 
  private:
   float voxelSize_;
@@ -70,5 +111,23 @@ class VoxelGrid {
   std::vector<int> count_;
   std::vector<std::int32_t> firstTag_;
 };
+
+inline VoxelGrid::Key VoxelGrid::keyOf(const Vec3& point) const {
+  const float sx = point.x() * inverseVoxelSize_;
+  const float sy = point.y() * inverseVoxelSize_;
+  const float sz = point.z() * inverseVoxelSize_;
+  constexpr auto kLimit = static_cast<float>(kMaxAbsCoordinate);
+  // The negated comparison also rejects NaN.
+  if (!(std::fabs(sx) <= kLimit && std::fabs(sy) <= kLimit && std::fabs(sz) <= kLimit)) {
+    return kInvalidKey;
+  }
+  // floor() for |x| < 2^21 without a libm call (baseline x86-64 has no roundss).
+  const auto field = [](float x) {
+    const auto i = static_cast<std::int32_t>(x);  // truncates toward zero
+    const std::int32_t floor = static_cast<float>(i) > x ? i - 1 : i;
+    return static_cast<Key>(floor + kMaxAbsCoordinate + 1);
+  };
+  return field(sx) | (field(sy) << kKeyFieldBits) | (field(sz) << (2 * kKeyFieldBits));
+}
 
 }  // namespace dynahand

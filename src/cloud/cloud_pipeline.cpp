@@ -1,9 +1,11 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "cloud/depth_filter.h"
+#include "cloud/limb_end.h"
 #include "cloud/region_grow.h"
 #include "dynahand/cloud.h"
 
@@ -18,6 +20,12 @@ namespace {
 constexpr float kCoarseRadiusFactor = 1.1f;
 constexpr int kMaxBoxRetries = 2;
 constexpr int kCandidateRounds = 3;
+// A limb is explored this many hand radii around its nearest point: far enough to see the
+// forearm leave toward the body and the hand end free.
+constexpr float kLimbRadiusFactor = 2.0f;
+// A ball moved toward a limb's free end stops with the end this far (in hand radii) from
+// its centre.
+constexpr float kEndInsideBall = 0.75f;
 
 // Nearest integer for x >= -0.5 (pixel coordinates), without a libm call.
 int roundToInt(float x) {
@@ -41,11 +49,16 @@ struct CloudPipeline::Impl {
   cloud::FilterScratch filterScratch;
   cloud::RegionGrower coarseGrower;
   cloud::RegionGrower fineGrower;
+  cloud::LimbEndFinder limbEnd;
   std::vector<float> coarseDepth;        // (coarse height x coarse width), m
   std::vector<std::uint8_t> coarseNear;  // coarse labels dilated by one cell
   std::vector<int> boxColumnCell;        // (box width) coarse column of each box column
   std::vector<int> boxRowCell;           // (box height) coarse row of each box row
   std::vector<Vec2> hullPoints;          // row extremes of the segment, normalised image plane
+  std::vector<float> segmentDepth;       // every other working sample of the box, m (see run)
+  std::vector<float> boxColumnX;         // (box width) x / z of each box column
+  std::vector<VoxelGrid::Key> rowKeys;   // (box width) voxel of each sample of a row
+  std::vector<int> columnVoxel;          // (box width) voxel of the last run over each column
 
   Impl(const Intrinsics& intrinsics, const CloudConfig& cfg)
       : k(intrinsics), config(cfg), voxels(cfg.voxelSizeM, cfg.maxVoxels) {}
@@ -61,8 +74,24 @@ struct CloudPipeline::Impl {
            grid.originU + r.maxI * grid.step >= k.width - margin ||
            grid.originV + r.maxJ * grid.step >= k.height - margin;
   }
+  // The free end (m) of the limb that the coarse volume r, grown from seed, belongs to
+  // (LimbEndFinder); false when r is no limb attached to the body.
+  bool findLimbEnd(const DepthGrid& grid, int seed, const GrownRegion& r, Vec3& end);
   Status run(const DepthFrame& frame, CloudFrame& out);
 };
+
+bool CloudPipeline::Impl::findLimbEnd(const DepthGrid& grid, int seed, const GrownRegion& r,
+                                      Vec3& end) {
+  const SegmentationConfig& seg = config.segmentation;
+  const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
+  // More than half the ball's cross-section is a body, not a limb (as in RegionGrower::grow).
+  if (r.areaM2 > 0.5f * std::numbers::pi_v<float> * coarseRadius * coarseRadius) return false;
+  const int cell = limbEnd.find(grid, k, seed, seg.step, kLimbRadiusFactor * seg.handRadiusM,
+                                seg.borderMarginPixels);
+  if (cell < 0) return false;
+  end = grid.point(k, cell % grid.width, cell / grid.width);
+  return true;
+}
 
 CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& config)
     : impl_(std::make_unique<Impl>(intrinsics, config)) {
@@ -72,6 +101,7 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
          intrinsics.fy > 0.0f && "intrinsics must be valid");
   const SegmentationConfig& s = config.segmentation;
   assert(s.handRadiusM > 0.0f && s.minAreaM2 >= 0.0f && s.maxSeedAttempts > 0 && s.coarseStep >= 0);
+  assert((s.growStep == 1 || s.growStep == 2) && "growStep is 1 or 2");
   assert(config.filter.minDepthM < config.filter.maxDepthM);
   impl_->coarseStep = s.coarseStep > 0 ? s.coarseStep : std::max(1, intrinsics.width / 80);
   const auto pixels = static_cast<std::size_t>(intrinsics.width) * intrinsics.height;
@@ -79,12 +109,25 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
                            static_cast<std::size_t>(intrinsics.height / impl_->coarseStep + 1);
   impl_->filterScratch.reserve(pixels);
   impl_->coarseGrower.reserve(coarseCells, intrinsics.width, intrinsics.height);
+  impl_->limbEnd.reserve(coarseCells, intrinsics.width, intrinsics.height);
   impl_->fineGrower.reserve(pixels, intrinsics.width, intrinsics.height);
   impl_->coarseDepth.reserve(coarseCells);
   impl_->coarseNear.reserve(coarseCells);
   impl_->boxColumnCell.reserve(static_cast<std::size_t>(intrinsics.width));
   impl_->boxRowCell.reserve(static_cast<std::size_t>(intrinsics.height));
   impl_->hullPoints.reserve(2 * static_cast<std::size_t>(intrinsics.height));
+  impl_->segmentDepth.reserve(pixels / 4 + static_cast<std::size_t>(intrinsics.width));
+  impl_->boxColumnX.reserve(static_cast<std::size_t>(intrinsics.width));
+  impl_->rowKeys.reserve(static_cast<std::size_t>(intrinsics.width));
+  impl_->columnVoxel.reserve(static_cast<std::size_t>(intrinsics.width));
+  // Voxel keys are computed without range checks: every range-gated point must fit.
+  [[maybe_unused]] const float maxX =
+      std::max(intrinsics.cx, static_cast<float>(intrinsics.width) - intrinsics.cx);
+  [[maybe_unused]] const float maxY =
+      std::max(intrinsics.cy, static_cast<float>(intrinsics.height) - intrinsics.cy);
+  assert(impl_->voxels.inRange(config.filter.maxDepthM *
+                               std::max({1.0f, maxX / intrinsics.fx, maxY / intrinsics.fy})) &&
+         "voxel size too small for the depth range");
 }
 
 CloudPipeline::~CloudPipeline() = default;
@@ -185,6 +228,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   bool fineFound[2] = {false, false};
   PixelBox box;
   int stride = 1;
+  int segmentFactor = 1;  // segmentation samples every segmentFactor working samples
   int regionCount = 0;
   for (int round = 0; round < kCandidateRounds && !fineFound[0]; ++round) {
     // The coarse ball is wider than the hand radius: the full-resolution nearest point
@@ -197,6 +241,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
     // SegmentationConfig::borderMarginPixels), and used when nothing better follows.
     int borderSeed = -1;
     float borderDepth = 0.0f;
+    int firstSeed = -1;
     int attempts = 0;
     while (regionCount == 0 && attempts++ < seg.maxSeedAttempts) {
       const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
@@ -215,15 +260,19 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       }
       coarseGrower.accept(cloud::kRegion1);
       first = r;
+      firstSeed = seed;
       regionCount = 1;
     }
     if (regionCount == 0 && borderSeed >= 0) {
       coarseGrower.reset(coarse, k);  // forget the passed-over labels
       first = coarseGrower.grow(borderSeed, seg.step, coarseRadius, seg.minAreaM2);
       coarseGrower.accept(cloud::kRegion1);
+      firstSeed = borderSeed;
       regionCount = 1;
     }
     if (regionCount == 0) return Ok{};  // no hand: valid, empty
+    Vec3 handEnd = Vec3::Zero();
+    const bool haveHandEnd = findLimbEnd(coarse, firstSeed, first, handEnd);
     int minI = first.minI, maxI = first.maxI, minJ = first.minJ, maxJ = first.maxJ;
     if (seg.secondRegionDepthBandM > 0.0f) {
       attempts = 0;
@@ -256,11 +305,17 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
     box.y1 = std::min(k.height, coarse.originV + maxJ * step + margin + 1);
 
     // Working resolution: samples no closer than half a voxel at the hand's depth.
+    const float pixelPitch = first.nearestPoint.z() / std::min(k.fx, k.fy);  // m
     stride = config.sampleStride;
     if (stride <= 0) {
-      const float pitchPerStride = first.nearestPoint.z() / std::min(k.fx, k.fy);  // m
-      stride = std::clamp(static_cast<int>(0.5f * config.voxelSizeM / pitchPerStride), 1, 4);
+      stride = std::clamp(static_cast<int>(0.5f * config.voxelSizeM / pixelPitch), 1, 4);
     }
+    // Region growing costs per sample and needs fewer of them than the voxels: with growStep
+    // 2, at stride 1 it takes every other sample while those stay within one voxel of each
+    // other (a finger is then still >= 3 samples wide). The voxels take every working sample.
+    segmentFactor =
+        seg.growStep == 2 && stride == 1 && 2.0f * pixelPitch <= config.voxelSizeM ? 2 : 1;
+    const int segmentStride = stride * segmentFactor;
 
     // --- 3. full-resolution segmentation, seeded inside each coarse region ---
     // With two regions, each pixel knows which coarse region its cell (or a neighbouring
@@ -289,27 +344,40 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       cloud::filterBox(frame, box, stride, config.filter, seg.step, k.fx, k.fy, filterScratch,
                        out.filteredDepthM);
 
-      const int bw = cloud::samplesAlong(box.width(), stride);
-      const int bh = cloud::samplesAlong(box.height(), stride);
+      // The segmentation grid: the working samples, or every other one of them.
+      const int bw = cloud::samplesAlong(box.width(), segmentStride);
+      const int bh = cloud::samplesAlong(box.height(), segmentStride);
+      const float* segmentGrid = out.filteredDepthM.data();
+      if (segmentFactor > 1) {
+        const int workingColumns = cloud::samplesAlong(box.width(), stride);
+        segmentDepth.resize(static_cast<std::size_t>(bw) * bh);
+        for (int v = 0; v < bh; ++v) {
+          const float* src = out.filteredDepthM.data() +
+                             static_cast<std::size_t>(v * segmentFactor) * workingColumns;
+          float* dst = segmentDepth.data() + static_cast<std::size_t>(v) * bw;
+          for (int u = 0; u < bw; ++u) dst[u] = src[u * segmentFactor];
+        }
+        segmentGrid = segmentDepth.data();
+      }
       // Coarse cell column / row of each box column / row.
       boxColumnCell.resize(static_cast<std::size_t>(bw));
       boxRowCell.resize(static_cast<std::size_t>(bh));
       for (int u = 0; u < bw; ++u) {
         boxColumnCell[static_cast<std::size_t>(u)] =
-            std::min(coarse.width - 1, (box.x0 + u * stride) / step);
+            std::min(coarse.width - 1, (box.x0 + u * segmentStride) / step);
       }
       for (int v = 0; v < bh; ++v) {
         boxRowCell[static_cast<std::size_t>(v)] =
-            std::min(coarse.height - 1, (box.y0 + v * stride) / step);
+            std::min(coarse.height - 1, (box.y0 + v * segmentStride) / step);
       }
 
       DepthGrid fine;
-      fine.depth = out.filteredDepthM.data();
+      fine.depth = segmentGrid;
       fine.width = bw;
       fine.height = bh;
       fine.originU = box.x0;
       fine.originV = box.y0;
-      fine.step = stride;
+      fine.step = segmentStride;
       fineGrower.reset(fine, k);
       fineFound[0] = fineFound[1] = false;
       // The coarse pass accepted these volumes; at full resolution a filtered speck may still
@@ -321,17 +389,30 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
           // Region 1 may start anywhere in the box but in region 2's cells: when its coarse
           // volume splits at full resolution (a fingertip in front of the palm), the palm
           // beside it is still the nearest large volume. Region 2 starts in its own cells.
-          const int seed = fineGrower.nearestFreeCellWhere([&](int u, int v) {
-            if (!twoRegions) return true;
-            const std::uint8_t coarseLabel =
-                coarseNear[static_cast<std::size_t>(boxRowCell[static_cast<std::size_t>(v)]) *
+          const int seed =
+              !twoRegions
+                  ? fineGrower.nearestFreeCell()
+                  : fineGrower.nearestFreeCellWhere([&](int u, int v) {
+                      const std::uint8_t coarseLabel = coarseNear
+                          [static_cast<std::size_t>(boxRowCell[static_cast<std::size_t>(v)]) *
                                coarse.width +
                            static_cast<std::size_t>(boxColumnCell[static_cast<std::size_t>(u)])];
-            return label == cloud::kRegion1 ? coarseLabel != cloud::kRegion2
-                                            : coarseLabel == cloud::kRegion2;
-          });
+                      return label == cloud::kRegion1 ? coarseLabel != cloud::kRegion2
+                                                      : coarseLabel == cloud::kRegion2;
+                    });
           if (seed < 0) break;
-          const GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
+          GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
+          const Vec3 toNearest = g.nearestPoint - handEnd;
+          if (r == 0 && haveHandEnd && toNearest.norm() > seg.handRadiusM) {
+            // The ball around the nearest sample leaves out the limb's free end: that sample
+            // is on a forearm pointing at the camera. The ball moves toward the free end
+            // until it holds it with a quarter radius to spare.
+            const Vec3 centre =
+                handEnd + toNearest.normalized() * (kEndInsideBall * seg.handRadiusM);
+            const int endSeed = fineGrower.closestFreeCell(centre);
+            if (endSeed >= 0)
+              g = fineGrower.grow(endSeed, seg.step, seg.handRadiusM, seg.minAreaM2);
+          }
           if (g.areaM2 >= seg.minAreaM2 && !g.inFrontOfSurface) {
             fineGrower.accept(static_cast<CellLabel>(label));
             fineRegion[r] = g;
@@ -376,33 +457,95 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   const int blockOffset = stride / 2;
   PixelBox segBox{k.width, k.height, 0, 0};
   int maskPixels = 0;
+  int segmentedSamples = 0;
+  Vec3 segmentedSum = Vec3::Zero();  // m
+  boxColumnX.resize(static_cast<std::size_t>(bw));
+  for (int u = 0; u < bw; ++u) {
+    boxColumnX[static_cast<std::size_t>(u)] =
+        (static_cast<float>(box.x0 + u * stride) - k.cx) * invFx;
+  }
+  rowKeys.resize(static_cast<std::size_t>(bw));
+  columnVoxel.assign(static_cast<std::size_t>(bw), -1);
+  // Voxels are met in runs along a row: a run's points are summed here and added at once.
+  // The run's first column usually held the same voxel one row up: that voxel is the hint
+  // that spares the voxel table's lookup (cache misses).
+  VoxelGrid::Run run;
+  bool runOpen = false;
+  int runBegin = 0;  // first column of the run
+  int runEnd = 0;    // one past its last column
+  const auto closeRun = [&] {
+    voxels.endRun(run);
+    std::fill(columnVoxel.begin() + runBegin, columnVoxel.begin() + runEnd, run.voxel);
+    runOpen = false;
+  };
+  // With segmentFactor 2 a working sample takes the label of the segmentation sample at the
+  // top left of its 2 x 2 group when it lies on the same surface (the step rule between
+  // segmentation neighbours): silhouette edges stay at the working resolution.
+  const int segmentShift = segmentFactor == 2 ? 1 : 0;
+  const int segmentColumns = cloud::samplesAlong(box.width(), stride * segmentFactor);
+  const float* segmentGrid = segmentFactor == 2 ? segmentDepth.data() : out.filteredDepthM.data();
+  const float handRadius2 = seg.handRadiusM * seg.handRadiusM;
+  const float segmentSpacing =
+      static_cast<float>(stride * segmentFactor) / std::min(k.fx, k.fy);  // m per m of depth
   for (int v = 0; v < bh; ++v) {
     const int pv = box.y0 + v * stride;
-    const std::uint8_t* labelRow = fineLabels.data() + static_cast<std::size_t>(v) * bw;
+    const std::size_t segmentRow = static_cast<std::size_t>(v >> segmentShift) * segmentColumns;
+    const std::uint8_t* labelRow = fineLabels.data() + segmentRow;
+    const float* segmentDepthRow = segmentGrid + segmentRow;
+    const bool segmentSampleRow = (v & segmentShift) == 0;
     const float* depthRow = out.filteredDepthM.data() + static_cast<std::size_t>(v) * bw;
     const int blockV0 = std::max(0, pv - blockOffset);
     const int blockV1 = std::min(k.height, pv - blockOffset + stride);
     const float ny = (static_cast<float>(pv) - k.cy) * invFy;
     int rowMin = -1;
     int rowMax = -1;
-    for (int u = 0; u < bw; ++u) {
-      const std::uint8_t label = labelRow[u];
-      if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
-      const int pu = box.x0 + u * stride;
-      const float z = depthRow[u];
-      const float nx = (static_cast<float>(pu) - k.cx) * invFx;
-      voxels.add(Vec3(nx * z, ny * z, z), pv * k.width + pu);
-      const int blockU0 = std::max(0, pu - blockOffset);
-      const int blockU1 = std::min(k.width, pu - blockOffset + stride);
+    voxels.keysOfRow(boxColumnX.data(), ny, depthRow, bw, rowKeys.data());
+    // Segmented samples [spanBegin, u) in a row: their blocks make one pixel span.
+    int spanBegin = -1;
+    const auto closeSpan = [&](int spanEnd) {
+      const int pixel0 = std::max(0, box.x0 + spanBegin * stride - blockOffset);
+      const int pixel1 = std::min(k.width, box.x0 + (spanEnd - 1) * stride - blockOffset + stride);
       for (int mv = blockV0; mv < blockV1; ++mv) {
         std::uint8_t* maskRow = out.mask.data() + static_cast<std::size_t>(mv) * k.width;
-        // A plain loop: blocks are 1-4 bytes, too short for a memset call.
-        for (int mu = blockU0; mu < blockU1; ++mu) maskRow[mu] = 1;
+        std::fill(maskRow + pixel0, maskRow + pixel1, std::uint8_t{1});
       }
-      maskPixels += (blockV1 - blockV0) * (blockU1 - blockU0);
+      maskPixels += (blockV1 - blockV0) * (pixel1 - pixel0);
+      spanBegin = -1;
+    };
+    for (int u = 0; u < bw; ++u) {
+      const std::uint8_t label = labelRow[u >> segmentShift];
+      const float z = depthRow[u];
+      bool segmented = label == cloud::kRegion1 || label == cloud::kRegion2;
+      if (segmented && !(segmentSampleRow && (u & segmentShift) == 0)) {
+        const float zs = segmentDepthRow[u >> segmentShift];
+        const Vec3 p(boxColumnX[static_cast<std::size_t>(u)] * z, ny * z, z);
+        segmented = z > 0.0f &&
+                    std::fabs(z - zs) <= cloud::maxDepthStep(seg.step, zs, segmentSpacing) &&
+                    (p - fineRegion[label - 1].nearestPoint).squaredNorm() <= handRadius2;
+      }
+      if (!segmented) {
+        if (spanBegin >= 0) closeSpan(u);
+        continue;
+      }
+      if (spanBegin < 0) spanBegin = u;
+      ++segmentedSamples;
+      const int pu = box.x0 + u * stride;
+      const Vec3 p(boxColumnX[static_cast<std::size_t>(u)] * z, ny * z, z);
+      const VoxelGrid::Key key = rowKeys[static_cast<std::size_t>(u)];
+      segmentedSum += p;
+      if (!runOpen || key != run.key) {
+        if (runOpen) closeRun();
+        run = voxels.beginRun(key, pv * k.width + pu, columnVoxel[static_cast<std::size_t>(u)]);
+        runOpen = true;
+        runBegin = u;
+      }
+      VoxelGrid::addToRun(run, p);
+      runEnd = u + 1;
       if (rowMin < 0) rowMin = pu;
       rowMax = pu;
     }
+    if (spanBegin >= 0) closeSpan(bw);
+    if (runOpen) closeRun();  // runs end with the row: their columns are in it
     if (rowMin < 0) continue;
     hullPoints.emplace_back((static_cast<float>(rowMin) - k.cx) * invFx, ny);
     if (rowMax != rowMin) hullPoints.emplace_back((static_cast<float>(rowMax) - k.cx) * invFx, ny);
@@ -429,16 +572,11 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   s.found = true;
   s.regionCount = fineFound[1] ? 2 : 1;
   s.nearestPoint = fineRegion[0].nearestPoint;
-  Vec3 pointSum = fineRegion[0].pointSum;
   s.pixelCount = maskPixels;
-  s.sampleCount = fineRegion[0].cellCount;
+  s.sampleCount = segmentedSamples;
   s.areaM2 = fineRegion[0].areaM2;
-  if (fineFound[1]) {
-    pointSum += fineRegion[1].pointSum;
-    s.sampleCount += fineRegion[1].cellCount;
-    s.areaM2 += fineRegion[1].areaM2;
-  }
-  s.centroid = pointSum / static_cast<float>(s.sampleCount);
+  if (fineFound[1]) s.areaM2 += fineRegion[1].areaM2;
+  s.centroid = segmentedSum / static_cast<float>(segmentedSamples);
   const GrownRegion& hand = fineRegion[0];
   s.cutPixelCount = hand.cutCount;
   if (hand.cutCount > 0) {

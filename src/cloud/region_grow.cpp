@@ -27,11 +27,12 @@ void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
   k_ = k;
   const auto cells = static_cast<std::size_t>(grid.width) * grid.height;
   labels_.assign(cells, kFree);
-  // One byte per cell (cache-friendly); cleared per grid and when the 255 stamps run out.
-  visited_.assign(cells, 0);
-  separate_.assign(cells, 0);
-  acrossQueued_.assign(cells, 0);
-  attempt_ = 0;
+  // One byte per cell (cache-friendly), stamped with the grow() attempt. Stamps only grow
+  // until they wrap (then all are wiped, in grow()), so a stale stamp of an earlier grid never
+  // equals the current one: nothing to clear here.
+  visited_.resize(cells);
+  separate_.resize(cells);
+  acrossQueued_.resize(cells);
   queue_.resize(cells);
   across_.resize(cells);
   acrossSide_.resize(cells);
@@ -48,6 +49,7 @@ void RegionGrower::reset(const DepthGrid& grid, const Intrinsics& k) {
   }
   regionEnd_ = 0;
   cutBegin_ = static_cast<int>(cells);
+  labelled_ = false;
 }
 
 int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
@@ -57,6 +59,19 @@ int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
   const float limit =
       maxDepthM > 0.0f ? std::nextafter(maxDepthM, 1e9f) : std::numeric_limits<float>::infinity();
   std::uint32_t bestKey = std::bit_cast<std::uint32_t>(limit) - 1u;
+  if (!labelled_ && avoidCentre == nullptr) {
+    // Every cell is free: the smallest key, then its first cell (both loops vectorise).
+    const std::size_t cells = static_cast<std::size_t>(grid_.width) * grid_.height;
+    std::uint32_t smallest = std::numeric_limits<std::uint32_t>::max();
+    for (std::size_t c = 0; c < cells; ++c) {
+      const std::uint32_t key = std::bit_cast<std::uint32_t>(grid_.depth[c]) - 1u;
+      smallest = key < smallest ? key : smallest;
+    }
+    if (smallest >= bestKey) return -1;
+    std::size_t c = 0;
+    while (std::bit_cast<std::uint32_t>(grid_.depth[c]) - 1u != smallest) ++c;
+    return static_cast<int>(c);
+  }
   const float avoid2 = avoidRadiusM * avoidRadiusM;
   for (int j = 0; j < grid_.height; ++j) {
     const std::size_t row = static_cast<std::size_t>(j) * grid_.width;
@@ -68,6 +83,27 @@ int RegionGrower::nearestFreeCell(float maxDepthM, const Vec3* avoidCentre,
       if (avoidCentre && (grid_.point(k_, i, j) - *avoidCentre).squaredNorm() <= avoid2) continue;
       bestKey = key;
       best = static_cast<int>(row + static_cast<std::size_t>(i));
+    }
+  }
+  return best;
+}
+
+int RegionGrower::closestFreeCell(const Vec3& p) const {
+  int best = -1;
+  float bestDistance2 = std::numeric_limits<float>::infinity();
+  for (int j = 0; j < grid_.height; ++j) {
+    const std::size_t row = static_cast<std::size_t>(j) * grid_.width;
+    const float* depth = grid_.depth + row;
+    for (int i = 0; i < grid_.width; ++i) {
+      const float z = depth[i];
+      if (z == 0.0f || labels_[row + i] != kFree) continue;
+      const Vec3 q(columnX_[static_cast<std::size_t>(i)] * z,
+                   rowY_[static_cast<std::size_t>(j)] * z, z);
+      const float d2 = (q - p).squaredNorm();
+      if (d2 < bestDistance2) {
+        bestDistance2 = d2;
+        best = static_cast<int>(row + static_cast<std::size_t>(i));
+      }
     }
   }
   return best;
@@ -329,6 +365,7 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
 
 void RegionGrower::accept(CellLabel region) {
   assert(region == kRegion1 || region == kRegion2);
+  labelled_ = true;
   const auto cut = static_cast<std::uint8_t>(region == kRegion1 ? kCut1 : kCut2);
   for (int q = 0; q < regionEnd_; ++q)
     labels_[cellOf(queue_[static_cast<std::size_t>(q)])] = region;
@@ -338,6 +375,7 @@ void RegionGrower::accept(CellLabel region) {
 }
 
 void RegionGrower::reject() {
+  labelled_ = true;
   for (int q = 0; q < regionEnd_; ++q)
     labels_[cellOf(queue_[static_cast<std::size_t>(q)])] = kTried;
 }

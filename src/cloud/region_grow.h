@@ -66,6 +66,8 @@ class RegionGrower {
   // that depth; with avoidCentre set, only cells farther than avoidRadiusM from it.
   int nearestFreeCell(float maxDepthM = 0.0f, const Vec3* avoidCentre = nullptr,
                       float avoidRadiusM = 0.0f) const;
+  // The valid kFree cell whose point is closest to p (m), or -1.
+  int closestFreeCell(const Vec3& p) const;
   // Nearest valid kFree cell (i, j) for which allowed(i, j) is true, or -1. The
   // predicate is only asked about cells nearer than the best so far (rarely).
   template <class Allowed>
@@ -123,7 +125,8 @@ class RegionGrower {
     return static_cast<std::size_t>(packed >> 16) * static_cast<std::size_t>(grid_.width) +
            static_cast<std::size_t>(packed & 0xffff);
   }
-  std::uint8_t attempt_ = 0;  // grows per grow() call, reset with the grid
+  std::uint8_t attempt_ = 0;  // grows per grow() call; the stamps are wiped when it wraps
+  bool labelled_ = false;     // some cell is no longer kFree (since the last reset)
   int regionEnd_ = 0;         // queue_[0, regionEnd_) = region of the last grow
   int cutBegin_ = 0;          // queue_[cutBegin_, cells) = its cut cells
 };

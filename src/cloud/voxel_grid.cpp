@@ -17,16 +17,13 @@ std::uint64_t mixKey(std::uint64_t x) {
   return x;
 }
 
-// floor() for |x| < 2^21 without a libm call (baseline x86-64 has no roundss).
-std::int32_t floorToInt(float x) {
-  const auto i = static_cast<std::int32_t>(x);  // truncates toward zero
-  return static_cast<float>(i) > x ? i - 1 : i;
-}
+constexpr std::int32_t kKeyOffset = VoxelGrid::kMaxAbsCoordinate + 1;
+constexpr std::uint64_t kKeyFieldMask = (std::uint64_t{1} << VoxelGrid::kKeyFieldBits) - 1u;
 
-std::uint64_t packKey(std::int32_t ix, std::int32_t iy, std::int32_t iz) {
-  constexpr std::int32_t kOffset = VoxelGrid::kMaxAbsCoordinate + 1;
-  const auto field = [](std::int32_t c) { return static_cast<std::uint64_t>(c + kOffset); };
-  return field(ix) | (field(iy) << 21) | (field(iz) << 42);
+// Voxel coordinate `field` (0 = x, 1 = y, 2 = z) of a key.
+std::int32_t unpackKey(std::uint64_t key, int field) {
+  return static_cast<std::int32_t>((key >> (field * VoxelGrid::kKeyFieldBits)) & kKeyFieldMask) -
+         kKeyOffset;
 }
 
 }  // namespace
@@ -58,29 +55,28 @@ void VoxelGrid::clear() {
   }
 }
 
-bool VoxelGrid::add(const Vec3& point, std::int32_t tag) {
-  const float sx = point.x() * inverseVoxelSize_;
-  const float sy = point.y() * inverseVoxelSize_;
-  const float sz = point.z() * inverseVoxelSize_;
-  constexpr auto kLimit = static_cast<float>(kMaxAbsCoordinate);
-  // The negated comparison also rejects NaN.
-  if (!(std::fabs(sx) <= kLimit && std::fabs(sy) <= kLimit && std::fabs(sz) <= kLimit)) {
-    ++droppedPoints_;
-    return false;
+VoxelGrid::Run VoxelGrid::beginRun(Key key, std::int32_t tag, int hint) {
+  Run run;
+  run.key = key;
+  if (key == kInvalidKey) return run;
+  // Sums are kept relative to the voxel's corner (small numbers: accurate float sums).
+  const auto open = [&](std::size_t v) {
+    run.voxel = static_cast<int>(v);
+    run.corner = corner_[v];
+    run.sum = sum_[v];
+    run.count = count_[v];
+    lastKey_ = key;
+    lastVoxel_ = static_cast<std::int32_t>(v);
+    return run;
+  };
+  if (hint >= 0 && hint < voxelCount_ && key_[static_cast<std::size_t>(hint)] == key) {
+    return open(static_cast<std::size_t>(hint));
   }
-  const std::int32_t ix = floorToInt(sx);
-  const std::int32_t iy = floorToInt(sy);
-  const std::int32_t iz = floorToInt(sz);
-  const std::uint64_t key = packKey(ix, iy, iz);
-  if (lastVoxel_ >= 0 && key == lastKey_) {
-    const auto v = static_cast<std::size_t>(lastVoxel_);
-    sum_[v] += point - corner_[v];
-    ++count_[v];
-    return true;
-  }
+  if (lastVoxel_ >= 0 && key == lastKey_) return open(static_cast<std::size_t>(lastVoxel_));
   // x-neighbouring voxels get neighbouring slots: a row-major pixel scan then walks the
   // table along cache lines instead of missing on every new voxel.
-  const std::uint64_t yz = packKey(0, iy, iz);
+  const std::int32_t ix = unpackKey(key, 0);
+  const std::uint64_t yz = (key & ~kKeyFieldMask) | static_cast<std::uint64_t>(kKeyOffset);
   std::uint32_t index =
       (static_cast<std::uint32_t>(mixKey(yz)) + static_cast<std::uint32_t>(ix)) & slotMask_;
   const std::uint32_t stampBits = static_cast<std::uint32_t>(stamp16_) << 16;
@@ -88,30 +84,45 @@ bool VoxelGrid::add(const Vec3& point, std::int32_t tag) {
     const std::uint32_t slot = slots_[index];
     if ((slot & 0xffff0000u) != stampBits) break;  // empty this frame: a new voxel
     const auto v = static_cast<std::size_t>(slot & 0xffffu);
-    if (key_[v] == key) {
-      sum_[v] += point - corner_[v];
-      ++count_[v];
-      lastKey_ = key;
-      lastVoxel_ = static_cast<std::int32_t>(v);
-      return true;
-    }
+    if (key_[v] == key) return open(v);
     index = (index + 1u) & slotMask_;
   }
-  if (voxelCount_ == maxVoxels_) {
-    ++droppedPoints_;
-    return false;
-  }
+  if (voxelCount_ == maxVoxels_) return run;
   const auto v = static_cast<std::size_t>(voxelCount_++);
   slots_[index] = stampBits | static_cast<std::uint32_t>(v);
   key_[v] = key;
-  corner_[v] =
-      Vec3(static_cast<float>(ix), static_cast<float>(iy), static_cast<float>(iz)) * voxelSize_;
-  sum_[v] = point - corner_[v];
-  count_[v] = 1;
+  corner_[v] = Vec3(static_cast<float>(ix), static_cast<float>(unpackKey(key, 1)),
+                    static_cast<float>(unpackKey(key, 2))) *
+               voxelSize_;
+  sum_[v] = Vec3::Zero();
+  count_[v] = 0;
   firstTag_[v] = tag;
-  lastKey_ = key;
-  lastVoxel_ = static_cast<std::int32_t>(v);
-  return true;
+  return open(v);
+}
+
+void VoxelGrid::endRun(const Run& run) {
+  if (run.voxel < 0) {
+    droppedPoints_ += run.added;
+    return;
+  }
+  const auto v = static_cast<std::size_t>(run.voxel);
+  sum_[v] = run.sum;
+  count_[v] = run.count;
+}
+
+void VoxelGrid::keysOfRow(const float* xPerZ, float yPerZ, const float* z, int n, Key* keys) const {
+  const auto field = [](float x) {
+    const auto i = static_cast<std::int32_t>(x);  // truncates toward zero
+    const std::int32_t floor = i - (static_cast<float>(i) > x ? 1 : 0);
+    return static_cast<Key>(static_cast<std::uint32_t>(floor + kKeyOffset));
+  };
+  for (int i = 0; i < n; ++i) {
+    // The same products as keyOf(point): point first, then scaled to voxels.
+    const float x = xPerZ[i] * z[i];
+    const float y = yPerZ * z[i];
+    keys[i] = field(x * inverseVoxelSize_) | (field(y * inverseVoxelSize_) << kKeyFieldBits) |
+              (field(z[i] * inverseVoxelSize_) << (2 * kKeyFieldBits));
+  }
 }
 
 Vec3 VoxelGrid::centroid(int i) const {

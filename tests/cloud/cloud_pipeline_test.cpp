@@ -199,6 +199,34 @@ TEST(CloudPipeline, AutomaticStrideKeepsHalfAVoxelBetweenSamples) {
   }
 }
 
+TEST(CloudPipeline, GrowStep2SegmentsTheSameHandAsEverySample) {
+  // 320 px, hand at 0.45 m: working stride 1; growStep 2 grows on every other sample (3.2 mm
+  // apart, within a 5 mm voxel) and lets the samples between join. Same hand, within a few
+  // percent of the samples, every point in the ball.
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  const DepthFrame frame =
+      cloud::scenes::render(k, cloud::scenes::handWithForearm(Vec3(0.0f, 0.0f, 0.45f)), 0.9f);
+  CloudConfig sparse;
+  sparse.segmentation.growStep = 2;
+  CloudPipeline every(k);
+  CloudPipeline half(k, sparse);
+  CloudFrame a;
+  CloudFrame b;
+  ASSERT_TRUE(every.process(frame, a).ok());
+  ASSERT_TRUE(half.process(frame, b).ok());
+  ASSERT_TRUE(a.segment.found && b.segment.found);
+  EXPECT_EQ(b.filterStride, 1);
+  EXPECT_NEAR(static_cast<float>(b.segment.sampleCount), static_cast<float>(a.segment.sampleCount),
+              0.03f * a.segment.sampleCount);
+  EXPECT_NEAR(static_cast<float>(b.pointCount()), static_cast<float>(a.pointCount()),
+              0.03f * static_cast<float>(a.pointCount()));
+  int weights = 0;
+  for (int w : b.pointWeights) weights += w;
+  EXPECT_EQ(weights, b.segment.sampleCount);
+  const float radius = sparse.segmentation.handRadiusM;
+  for (const Vec3& p : b.points) EXPECT_LE((p - b.segment.nearestPoint).norm(), radius + 1e-5f);
+}
+
 TEST(CloudPipeline, FreeSpaceQueryAgreesWithBruteForce) {
   const Intrinsics k = cloud::scenes::camera(160, 120);
   // No wall: the background has no data (free), the hand occludes.

@@ -1,0 +1,136 @@
+#include "cloud/limb_end.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "cloud/depth_filter.h"
+
+namespace dynahand::cloud {
+
+namespace {
+enum CellState : std::uint8_t { kUnseen = 0, kSurface = 1, kAttachment = 2 };
+}  // namespace
+
+void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
+  columnX_.reserve(static_cast<std::size_t>(maxWidth));
+  rowY_.reserve(static_cast<std::size_t>(maxHeight));
+  steps_.reserve(cells);
+  state_.reserve(cells);
+  cells_.reserve(cells);
+  queue_.reserve(cells);
+}
+
+int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
+                        const DepthStepRule& rule, float limbRadiusM, int borderMarginPixels) {
+  const int w = grid.width;
+  const int h = grid.height;
+  const auto cellCount = static_cast<std::size_t>(w) * h;
+  state_.assign(cellCount, kUnseen);
+  steps_.assign(cellCount, -1);
+  cells_.clear();
+  queue_.clear();
+  const float* depth = grid.depth;
+  const auto step = static_cast<float>(grid.step);
+  const float spacingX = step / k.fx;
+  const float spacingY = step / k.fy;
+  // One rule both ways (symmetric), so the surface explored is the graph searched.
+  const auto joined = [&](float za, float zb, float spacing) {
+    return std::fabs(za - zb) <= maxDepthStep(rule, std::max(za, zb), spacing);
+  };
+  const auto atBorder = [&](int i, int j) {
+    if (borderMarginPixels <= 0) return i == 0 || j == 0 || i + 1 == w || j + 1 == h;
+    const int u = grid.originU + i * grid.step;
+    const int v = grid.originV + j * grid.step;
+    return u < borderMarginPixels || v < borderMarginPixels || u >= k.width - borderMarginPixels ||
+           v >= k.height - borderMarginPixels;
+  };
+  // Normalised image coordinates of each column / row: x = columnX[i] * z.
+  columnX_.resize(static_cast<std::size_t>(w));
+  rowY_.resize(static_cast<std::size_t>(h));
+  for (int i = 0; i < w; ++i) {
+    columnX_[static_cast<std::size_t>(i)] =
+        (static_cast<float>(grid.originU + i * grid.step) - k.cx) / k.fx;
+  }
+  for (int j = 0; j < h; ++j) {
+    rowY_[static_cast<std::size_t>(j)] =
+        (static_cast<float>(grid.originV + j * grid.step) - k.cy) / k.fy;
+  }
+  const auto point = [&](int i, int j, float z) {
+    return Vec3(columnX_[static_cast<std::size_t>(i)] * z, rowY_[static_cast<std::size_t>(j)] * z,
+                z);
+  };
+  const int seedI = seed % w;
+  const int seedJ = seed / w;
+  const Vec3 centre = point(seedI, seedJ, depth[seed]);
+  const float radius2 = limbRadiusM * limbRadiusM;
+  // Cells are queued as packed coordinates (j << 16 | i): no division per cell.
+  const auto pack = [](int i, int j) { return (j << 16) | i; };
+
+  // 1. The connected surface inside the ball; attachments where it leaves the ball or
+  //    the image.
+  state_[static_cast<std::size_t>(seed)] = kSurface;
+  cells_.push_back(pack(seedI, seedJ));
+  bool attached = false;
+  for (std::size_t q = 0; q < cells_.size(); ++q) {
+    const int i = cells_[q] & 0xffff;
+    const int j = cells_[q] >> 16;
+    const int c = j * w + i;
+    const float z = depth[c];
+    bool leaves = atBorder(i, j);
+    const auto visit = [&](int n, int ni, int nj, float spacing) {
+      const auto un = static_cast<std::size_t>(n);
+      if (state_[un] != kUnseen || depth[n] == 0.0f || !joined(z, depth[n], spacing)) return;
+      if ((point(ni, nj, depth[n]) - centre).squaredNorm() > radius2) {
+        leaves = true;
+        return;
+      }
+      state_[un] = kSurface;
+      cells_.push_back(pack(ni, nj));
+    };
+    if (i > 0) visit(c - 1, i - 1, j, spacingX);
+    if (i + 1 < w) visit(c + 1, i + 1, j, spacingX);
+    if (j > 0) visit(c - w, i, j - 1, spacingY);
+    if (j + 1 < h) visit(c + w, i, j + 1, spacingY);
+    if (leaves) {
+      state_[static_cast<std::size_t>(c)] = kAttachment;
+      steps_[static_cast<std::size_t>(c)] = 0;
+      queue_.push_back(cells_[q]);
+      attached = true;
+    }
+  }
+  if (!attached) return -1;
+
+  // 2. Steps along the surface from the nearest attachment (breadth-first from all of them).
+  for (std::size_t q = 0; q < queue_.size(); ++q) {
+    const int i = queue_[q] & 0xffff;
+    const int j = queue_[q] >> 16;
+    const int c = j * w + i;
+    const float z = depth[c];
+    const int next = steps_[static_cast<std::size_t>(c)] + 1;
+    const auto relax = [&](int n, int ni, int nj, float spacing) {
+      const auto un = static_cast<std::size_t>(n);
+      if (state_[un] == kUnseen || steps_[un] >= 0 || !joined(z, depth[n], spacing)) return;
+      steps_[un] = next;
+      queue_.push_back(pack(ni, nj));
+    };
+    if (i > 0) relax(c - 1, i - 1, j, spacingX);
+    if (i + 1 < w) relax(c + 1, i + 1, j, spacingX);
+    if (j > 0) relax(c - w, i, j - 1, spacingY);
+    if (j + 1 < h) relax(c + w, i, j + 1, spacingY);
+  }
+
+  // 3. The farthest reachable cell (first in discovery order on ties: deterministic).
+  int end = -1;
+  int farthest = -1;
+  for (const std::int32_t packed : cells_) {
+    const int c = (packed >> 16) * w + (packed & 0xffff);
+    const int d = steps_[static_cast<std::size_t>(c)];
+    if (d > farthest) {
+      farthest = d;
+      end = c;
+    }
+  }
+  return end;
+}
+
+}  // namespace dynahand::cloud

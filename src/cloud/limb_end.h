@@ -1,0 +1,41 @@
+// The free end of a limb: where the hand is when the nearest point is not on it.
+//
+// The nearest sufficiently large volume is the hand when the hand is held toward the
+// camera. When the forearm points at the camera (third-person view, the arm reaching in
+// from the image border), the nearest point is on the forearm and a hand-sized ball
+// around it holds forearm and palm but cuts the fingers off. A limb is attached to the
+// body at one end: its surface continues out of view (the image border) or beyond any
+// hand-sized ball (to the elbow, the torso). The hand is the other, free end: the point
+// of the limb's surface farthest along the surface from every attachment.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "cloud/region_grow.h"
+
+namespace dynahand::cloud {
+
+class LimbEndFinder {
+ public:
+  void reserve(std::size_t cells, int maxWidth, int maxHeight);
+
+  // Explores the surface connected to `seed` (neighbours within the step rule) inside a
+  // ball of limbRadiusM around the seed's point. Its attachments are the connected cells beyond the
+  // ball and the cells within borderMarginPixels of the image border. Returns the cell of the
+  // surface farthest from every attachment, measured along the surface (m), or -1 when the surface
+  // has no attachment (a hand on its own: its nearest point is fine).
+  int find(const DepthGrid& grid, const Intrinsics& k, int seed, const DepthStepRule& rule,
+           float limbRadiusM, int borderMarginPixels);
+
+ private:
+  std::vector<int> steps_;           // (cells) steps along the surface from an attachment, -1
+  std::vector<std::uint8_t> state_;  // (cells) 0 = unseen, 1 = on the surface, 2 = attachment
+  // Packed cells (j << 16 | i):
+  std::vector<std::int32_t> cells_;  // the surface's cells in discovery order
+  std::vector<std::int32_t> queue_;  // breadth-first order from the attachments
+  std::vector<float> columnX_;       // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;          // (height) (v - cy) / fy of each row
+};
+
+}  // namespace dynahand::cloud

@@ -113,7 +113,10 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
   physics::WorldSettings ws;
   ws.gravity = scene.gravity;
   ws.friction = scene.friction;
-  ws.iterations = 16;
+  // 32 sweeps: with 16, a thumb tucked in a fist that the palm drive (40 N) pressed into a
+  // wall folded past its joint limits (unconverged chain palm-thumb-wall) and then sprang
+  // free, ending 1-2 cm inside the wall; 32 keep it under 0.5 mm. About 90 us more per step.
+  ws.iterations = 32;
   ws.relaxIterations = 2;
   ws.positionIterations = 0;
   ws.contactInnerIterations = 2;

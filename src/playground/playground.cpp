@@ -16,6 +16,16 @@
 
 namespace dynahand::playground {
 
+// Joint drive targets stay this far inside the joint limits (rad, 4 degrees; see setTargets).
+constexpr float kLimitMargin = 0.07f;
+// Axes the hand model locks (min == max: abduction and twist of the finger PIP/DIP and thumb
+// IP joints) get this much play either side (rad, 1 degree). The physics engine limits a
+// locked axis with two opposing one-sided rows; on the thumb IP they fought each other and
+// the thumb swung 20-60 degrees off its target in free air, shaking the whole hand (fingers
+// 40 degrees off theirs, objects rattling in the grip). One degree of play keeps only one
+// row active at a time and the thumb within 1-4 degrees of its target.
+constexpr float kLockedAxisPlay = 0.0175f;
+
 struct Playground::Impl {
   SceneSpec scene;
   model::ArticulatedModel handCopy;
@@ -28,6 +38,8 @@ struct Playground::Impl {
   std::vector<unsigned char> handFlag;       // per world body
   int forearm = -1, palm = -1;               // model body indices
   model::ModelPose target;                   // tracked hand in the scene
+  model::JointAngles driveAngles;            // scratch: tracked angles kept off the limits
+  model::ModelPose drivePose;                // scratch: the pose of driveAngles
   bool hasTarget = false;
   std::optional<ViewNavigator> navigator;
   double time = 0.0;
@@ -58,12 +70,25 @@ struct Playground::Impl {
     for (std::size_t b = 0; b < camera.bodies.size(); ++b)
       target.bodies[b] = toScene * camera.bodies[b];
     const HandDriveSettings& h = scene.hand;
+    // A drive aiming at (or past) a joint limit pushes into the limit row with its full torque
+    // every step and the two fight; the tracker's poses and the clips do reach the limits, so
+    // the drive targets are kept kLimitMargin inside them.
+    model::jointAnglesInto(handCopy, camera, driveAngles);
+    for (std::size_t j = 0; j < driveAngles.angles.size(); ++j) {
+      const model::Joint& mj = handCopy.joints()[j];
+      for (int k = 0; k < 3; ++k) {
+        const float lo = mj.minAngle[k], hi = mj.maxAngle[k];
+        const float margin = std::min(kLimitMargin, 0.5f * (hi - lo));
+        driveAngles.angles[j][k] = std::clamp(driveAngles.angles[j][k], lo + margin, hi - margin);
+      }
+    }
+    model::forwardKinematicsInto(handCopy, driveAngles, drivePose);
     for (std::size_t j = 0; j < handJoints.size(); ++j) {
       if (handJoints[j] < 0) continue;
       const physics::JointDef& def = world.joint(handJoints[j]);
       const model::Joint& mj = handCopy.joints()[j];
-      const Quat parent = camera.bodies[static_cast<std::size_t>(mj.parent)].q * def.frameParent;
-      const Quat child = camera.bodies[static_cast<std::size_t>(mj.child)].q * def.frameChild;
+      const Quat parent = drivePose.bodies[static_cast<std::size_t>(mj.parent)].q * def.frameParent;
+      const Quat child = drivePose.bodies[static_cast<std::size_t>(mj.child)].q * def.frameChild;
       world.setJointDrive(handJoints[j], (parent.conjugate() * child).normalized(), jointTorque[j],
                           h.jointTimeConstant);
     }
@@ -113,7 +138,10 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
   physics::WorldSettings ws;
   ws.gravity = scene.gravity;
   ws.friction = scene.friction;
-  ws.iterations = 16;
+  // 32 sweeps: with 16, a thumb tucked in a fist that the palm drive (40 N) pressed into a
+  // wall folded past its joint limits (unconverged chain palm-thumb-wall) and then sprang
+  // free, ending 1-2 cm inside the wall; 32 keep it under 0.5 mm. About 90 us more per step.
+  ws.iterations = 32;
   ws.relaxIterations = 2;
   ws.positionIterations = 0;
   ws.contactInnerIterations = 2;
@@ -163,6 +191,12 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
     def.limitsEnabled = true;
     def.lower = Vec3(joint.minAngle.x(), -joint.maxAngle.y(), joint.minAngle.z());
     def.upper = Vec3(joint.maxAngle.x(), -joint.minAngle.y(), joint.maxAngle.z());
+    for (int k = 0; k < 3; ++k) {
+      if (def.upper[k] - def.lower[k] < kLockedAxisPlay) {
+        def.lower[k] -= kLockedAxisPlay;
+        def.upper[k] += kLockedAxisPlay;
+      }
+    }
     m.handJoints[j] = m.world.addJoint(def);
     m.jointTorque[j] =
         jointTorqueFor(hand.bodies()[static_cast<std::size_t>(joint.child)].name, scene.hand);

@@ -42,6 +42,8 @@ TEST(RealData, OpenPalmFramesAreAcquiredAndTheModelLiesOnTheHand) {
     nearSum += h.quality.dataNearModel;
     EXPECT_GE(h.quality.dataNearModel, 0.85f) << "frame " << i;
     EXPECT_GE(h.quality.modelOnHand, 0.80f) << "frame " << i;
+    EXPECT_EQ(h.quality.fingertipsOffHand, 0)
+        << "frame " << i << ": a model fingertip over background";
   }
   ASSERT_GT(acquired, 0);
   EXPECT_GE(nearSum / static_cast<float>(acquired), 0.85f);

@@ -140,15 +140,7 @@ std::unique_ptr<viewer::ViewerServer> startViewer(PlayOptions o) {
   std::string error;
   auto server = viewer::ViewerServer::start(o.server, &error);
   if (!server) throw std::runtime_error(error);
-  const std::string address = o.server.host + ":" + std::to_string(server->port());
-  if (server->pageAvailable())
-    std::printf("viewer at http://%s/  stream at ws://%s/\n", address.c_str(), address.c_str());
-  else
-    std::printf("stream at ws://%s/  (viewer page unavailable: %s)\n", address.c_str(),
-                o.webRoot.empty() ? "this build had no web/node_modules; run "
-                                    "scripts/install-deps.sh and rebuild"
-                                  : ("no index.html in " + o.webRoot).c_str());
-  std::fflush(stdout);
+  viewer::printViewerAddress(o.server, *server, o.webRoot);
   return server;
 }
 

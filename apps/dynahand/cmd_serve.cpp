@@ -32,17 +32,7 @@ int runServe(ServeCommandOptions o) {
     return kExitFailure;
   }
   server->setWelcome({(*session)->hello()});
-  const std::string address = o.server.host + ":" + std::to_string(server->port());
-  if (server->pageAvailable()) {
-    std::printf("viewer at http://%s/  stream at ws://%s/\n", address.c_str(), address.c_str());
-  } else {
-    const std::string why =
-        o.webRoot.empty()
-            ? "this build had no web/node_modules; run scripts/install-deps.sh and rebuild"
-            : "no index.html in " + o.webRoot;
-    std::printf("stream at ws://%s/  (viewer page unavailable: %s)\n", address.c_str(),
-                why.c_str());
-  }
+  viewer::printViewerAddress(o.server, *server, o.webRoot);
   std::printf("Ctrl-C stops\n");
   std::fflush(stdout);
 

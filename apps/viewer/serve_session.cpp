@@ -1,6 +1,7 @@
 #include "serve_session.h"
 
 #include <chrono>
+#include <cstdio>
 #include <deque>
 #include <filesystem>
 #include <optional>
@@ -199,6 +200,22 @@ Status ServeSession::step(ViewerServer* server, bool paused) {
   }
   server->publish(frameMessage(frame));
   return Ok{};
+}
+
+void printViewerAddress(const ServerOptions& options, const ViewerServer& server,
+                        const std::string& webRoot) {
+  const std::string address = options.host + ":" + std::to_string(server.port());
+  if (server.pageAvailable()) {
+    std::printf("viewer at http://%s/  stream at ws://%s/\n", address.c_str(), address.c_str());
+  } else {
+    const std::string why =
+        webRoot.empty()
+            ? "this build had no web/node_modules; run scripts/install-deps.sh and rebuild"
+            : "no index.html in " + webRoot;
+    std::printf("stream at ws://%s/  (viewer page unavailable: %s)\n", address.c_str(),
+                why.c_str());
+  }
+  std::fflush(stdout);
 }
 
 }  // namespace dynahand::viewer

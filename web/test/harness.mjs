@@ -76,3 +76,11 @@ export function startDynahand(dynahand, args) {
   });
   return { proc, address };
 }
+
+// A page showing a playground scene: waits until it has drawn a few frames and checks the
+// scene layer has its toggle.
+export async function waitForScene(page) {
+  await page.waitForFunction(() => window.dynahandViewer && window.dynahandViewer.framesDrawn >= 5,
+    null, { timeout: 60000 });
+  if ((await page.locator('#layer-scene').count()) !== 1) fail('no toggle for the scene layer');
+}

@@ -11,7 +11,7 @@ import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { decodePng, countHandPixels } from './png.mjs';
-import { arg, chromiumOrSkip, fail, openBrowser, outDir, skip, startDynahand } from './harness.mjs';
+import { arg, chromiumOrSkip, fail, openBrowser, outDir, skip, startDynahand, waitForScene } from './harness.mjs';
 
 const chromium = chromiumOrSkip();
 const dynahand = arg('--dynahand');
@@ -37,9 +37,7 @@ try {
   let page, errors;
   ({ context, page, errors } = await openBrowser(chromium, { width: 960, height: 600 }));
   await page.goto(url);
-  await page.waitForFunction(() => window.dynahandViewer && window.dynahandViewer.framesDrawn >= 5,
-    null, { timeout: 60000 });
-  if ((await page.locator('#layer-scene').count()) !== 1) fail('no toggle for the scene layer');
+  await waitForScene(page);
   const counter = async () => Number(await page.textContent('#frame-count'));
   const firstCount = await counter();
   const firstShot = await page.screenshot();

@@ -9,7 +9,7 @@ import fs from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
 import { decodePng } from './png.mjs';
-import { arg, chromiumOrSkip, fail, openBrowser, outDir, skip } from './harness.mjs';
+import { arg, chromiumOrSkip, fail, openBrowser, outDir, skip, waitForScene } from './harness.mjs';
 
 const chromium = chromiumOrSkip();
 const pageDir = arg('--page');
@@ -99,9 +99,7 @@ try {
   let page, errors;
   ({ context, page, errors } = await openBrowser(chromium, { width: 960, height: 600 }));
   await page.goto(url);
-  await page.waitForFunction(() => window.dynahandViewer && window.dynahandViewer.framesDrawn >= 5,
-    null, { timeout: 60000 });
-  if ((await page.locator('#layer-scene').count()) !== 1) fail('no toggle for the scene layer');
+  await waitForScene(page);
   const shotPath = path.join(out, 'scene.png');
   const first = crate(decodePng(await page.screenshot({ path: shotPath })));
   await page.waitForTimeout(800);

@@ -29,8 +29,10 @@ struct SuiteItem {
   std::string clip, profile;
   HandSize size;
   bool autoInit = false;  // false: initialised from frame 0's ground truth
-  std::array<bool, track::kStrategyCount> strategies = {true, true, true, true, true};
+  // The tracker's settings (ablations switch strategies off); keepCandidates is ignored.
+  track::TrackerSettings tracker;
   int frames = 0;
+  float speed = 1.0f;      // clip time multiplier (0.5: half speed)
   std::uint64_t seed = 1;  // sensor noise
 };
 

@@ -87,10 +87,10 @@ std::vector<SuiteItem> standardSuite(const SuiteOptions& options) {
     if (variant < track::kStrategyCount) {
       base.variant =
           std::string("no ") + track::strategyName(static_cast<track::StrategyKind>(variant));
-      base.strategies[static_cast<std::size_t>(variant)] = false;
+      base.tracker.strategies[static_cast<std::size_t>(variant)] = false;
     } else {
       base.variant = "normal only";
-      base.strategies = {true, false, false, false, false};
+      base.tracker.strategies = {true, false, false, false, false};
     }
     const std::size_t mediumIndex = options.quick ? 0 : 1;
     for (std::size_t c = 0; c < clipNames.size(); ++c) {
@@ -110,11 +110,11 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   so.profile = item.profile;
   so.frameCount = item.frames;
   so.seed = item.seed;
+  so.speed = item.speed;
   so.hand = item.size.dimensions;
   auto seq = synth::SyntheticSequence::create(so);
   if (!seq) return Error{seq.message()};
-  track::TrackerSettings settings;
-  settings.strategies = item.strategies;
+  track::TrackerSettings settings = item.tracker;
   settings.keepCandidates = false;  // no pictures here
   auto tracker = track::Tracker::create(seq->model(0), seq->intrinsics(), settings);
   if (!tracker) return Error{tracker.message()};

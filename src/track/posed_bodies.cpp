@@ -4,7 +4,12 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace dynahand::track {
 
@@ -48,16 +53,49 @@ void PosedBodies::setPose(int body, const Pose& pose) {
 
 float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
                                     float stopAbove) {
-  // Eight independent lanes (maximum and its face per lane) so the compiler vectorises
-  // the loop without reassociating floats; the lanes are reduced at the end.
+  // Eight independent lanes (maximum and its face per lane), reduced at the end: the same
+  // arithmetic in the SSE and the scalar path, so both give identical bits.
   const std::size_t n = t.offset.size();
   const float* nx = t.nx.data();
   const float* ny = t.ny.data();
   const float* nz = t.nz.data();
   const float* o = t.offset.data();
+  alignas(16) float best[8];
+  alignas(16) std::int32_t index[8];
+#if defined(__SSE2__)
+  const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
+  const __m128 stop = _mm_set1_ps(stopAbove);
+  __m128 best0 = _mm_set1_ps(-1e30f), best1 = best0;
+  __m128i index0 = _mm_setzero_si128(), index1 = index0;
+  __m128i lane0 = _mm_setr_epi32(0, 1, 2, 3), lane1 = _mm_setr_epi32(4, 5, 6, 7);
+  const __m128i eight = _mm_set1_epi32(8);
+  auto distance = [&](std::size_t i) {
+    return _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(nx + i), qx),
+                                            _mm_mul_ps(_mm_loadu_ps(ny + i), qy)),
+                                 _mm_mul_ps(_mm_loadu_ps(nz + i), qz)),
+                      _mm_loadu_ps(o + i));
+  };
+  auto keep = [](__m128& b, __m128i& idx, __m128 d, __m128i lane) {
+    const __m128 better = _mm_cmpgt_ps(d, b);
+    b = _mm_max_ps(d, b);  // == better ? d : b (no NaNs here)
+    const __m128i m = _mm_castps_si128(better);
+    idx = _mm_or_si128(_mm_and_si128(m, lane), _mm_andnot_si128(m, idx));
+  };
+  for (std::size_t f = 0; f < n; f += 8) {
+    const __m128 d0 = distance(f), d1 = distance(f + 4);
+    keep(best0, index0, d0, lane0);
+    keep(best1, index1, d1, lane1);
+    lane0 = _mm_add_epi32(lane0, eight);
+    lane1 = _mm_add_epi32(lane1, eight);
+    // The caller only needs to know the distance exceeds stopAbove: any plane says so.
+    if (_mm_movemask_ps(_mm_or_ps(_mm_cmpgt_ps(d0, stop), _mm_cmpgt_ps(d1, stop))) != 0) break;
+  }
+  _mm_store_ps(best, best0);
+  _mm_store_ps(best + 4, best1);
+  _mm_store_si128(reinterpret_cast<__m128i*>(index), index0);
+  _mm_store_si128(reinterpret_cast<__m128i*>(index + 4), index1);
+#else
   const float qx = q.x(), qy = q.y(), qz = q.z();
-  float best[8];
-  int index[8];
   for (int k = 0; k < 8; ++k) {
     best[k] = -1e30f;
     index[k] = 0;
@@ -66,15 +104,15 @@ float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* fac
     bool above = false;
     for (int k = 0; k < 8; ++k) {
       const std::size_t i = f + static_cast<std::size_t>(k);
-      const float d = nx[i] * qx + ny[i] * qy + nz[i] * qz - o[i];
+      const float d = (nx[i] * qx + ny[i] * qy) + nz[i] * qz - o[i];
       const bool better = d > best[k];
       best[k] = better ? d : best[k];
-      index[k] = better ? static_cast<int>(i) : index[k];
+      index[k] = better ? static_cast<std::int32_t>(i) : index[k];
       above |= d > stopAbove;
     }
-    // The caller only needs to know the distance exceeds stopAbove: any plane says so.
     if (above) break;
   }
+#endif
   float result = best[0];
   int which = index[0];
   for (int k = 1; k < 8; ++k) {

@@ -59,6 +59,8 @@ class ConvexShape {
   void computeDerived();
   // Closest point of face f's polygon to p (p projected on the plane, clamped to the edges).
   Vec3 closestOnFace(int f, const Vec3& p) const;
+  // projected (a point of face's plane) lies within the face's polygon.
+  bool onFacePolygon(const Face& face, const Vec3& projected) const;
 
   std::vector<Vec3> vertices_;
   std::vector<Face> faces_;

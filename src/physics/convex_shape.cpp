@@ -210,18 +210,22 @@ void ConvexShape::computeDerived() {
     boundingRadius_ = std::max(boundingRadius_, (v - centroid_).norm());
 }
 
+bool ConvexShape::onFacePolygon(const Face& face, const Vec3& projected) const {
+  // Inside the polygon when on the inner side of every edge (CCW about the normal).
+  const std::size_t count = face.vertices.size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vec3& a = vertices_[static_cast<std::size_t>(face.vertices[i])];
+    const Vec3& b = vertices_[static_cast<std::size_t>(face.vertices[(i + 1) % count])];
+    if ((b - a).cross(projected - a).dot(face.normal) < 0.0f) return false;
+  }
+  return true;
+}
+
 Vec3 ConvexShape::closestOnFace(int f, const Vec3& p) const {
   const Face& face = faces_[static_cast<std::size_t>(f)];
   const Vec3 projected = p - (face.normal.dot(p) - face.offset) * face.normal;
-  // Inside the polygon when on the inner side of every edge (CCW about the normal).
+  if (onFacePolygon(face, projected)) return projected;
   const std::size_t count = face.vertices.size();
-  bool inside = true;
-  for (std::size_t i = 0; i < count && inside; ++i) {
-    const Vec3& a = vertices_[static_cast<std::size_t>(face.vertices[i])];
-    const Vec3& b = vertices_[static_cast<std::size_t>(face.vertices[(i + 1) % count])];
-    if ((b - a).cross(projected - a).dot(face.normal) < 0.0f) inside = false;
-  }
-  if (inside) return projected;
   Vec3 best = Vec3::Zero();
   float bestDist2 = std::numeric_limits<float>::infinity();
   for (std::size_t i = 0; i < count; ++i) {
@@ -253,7 +257,18 @@ float ConvexShape::query(const Vec3& p, Vec3* closest, int* face) const {
     if (face) *face = maxFace;
     return maxDist;
   }
-  // Outside: the closest surface point lies on a face whose plane p is in front of.
+  // Outside. When p's foot on the farthest plane lies on that face, it is the closest
+  // point: no surface point can be nearer than the largest plane distance.
+  {
+    const Face& top = faces_[static_cast<std::size_t>(maxFace)];
+    const Vec3 projected = p - maxDist * top.normal;
+    if (onFacePolygon(top, projected)) {
+      if (closest) *closest = projected;
+      if (face) *face = maxFace;
+      return maxDist;
+    }
+  }
+  // Otherwise the closest surface point lies on a face whose plane p is in front of.
   int bestFace = maxFace;
   Vec3 best = Vec3::Zero();
   float bestDist2 = std::numeric_limits<float>::infinity();

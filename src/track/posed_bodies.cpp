@@ -125,24 +125,6 @@ float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* fac
   return result;
 }
 
-int PosedBodies::sortedBounds(const Vec3& p, BodyMask mask, std::pair<float, int>* order) const {
-  // Lower bounds on the distance to each allowed body, sorted ascending (insertion
-  // sort: at most 32 entries, stable so ties keep body order).
-  int count = 0;
-  for (int i = 0; i < size(); ++i) {
-    if (!(mask >> i & 1u)) continue;
-    const float bound = std::max(0.0f, (p - centroids_[static_cast<std::size_t>(i)]).norm() -
-                                           radii_[static_cast<std::size_t>(i)]);
-    int k = count++;
-    while (k > 0 && order[static_cast<std::size_t>(k - 1)].first > bound) {
-      order[static_cast<std::size_t>(k)] = order[static_cast<std::size_t>(k - 1)];
-      --k;
-    }
-    order[static_cast<std::size_t>(k)] = {bound, i};
-  }
-  return count;
-}
-
 SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) const {
   SurfaceHit best;
   best.distance = std::numeric_limits<float>::infinity();
@@ -174,27 +156,38 @@ SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) co
 }
 
 SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
-  std::array<std::pair<float, int>, 32> order;
-  const int count = sortedBounds(p, mask, order.data());
+  // Bounding-sphere lower bounds; the body with the smallest goes first for a tight best
+  // distance, then every other body whose bound does not exceed it (index order: ties
+  // still go to the lower index, as the answer is the same in any order).
+  std::array<float, 32> bounds;
+  int first = -1;
+  for (int i = 0; i < size(); ++i) {
+    if (!(mask >> i & 1u)) continue;
+    const auto bi = static_cast<std::size_t>(i);
+    bounds[bi] = std::max(0.0f, (p - centroids_[bi]).norm() - radii_[bi]);
+    if (first < 0 || bounds[bi] < bounds[static_cast<std::size_t>(first)]) first = i;
+  }
   SurfaceHit best;
   best.distance = std::numeric_limits<float>::infinity();
-  for (int k = 0; k < count; ++k) {
-    const auto [bound, i] = order[static_cast<std::size_t>(k)];
-    if (bound > best.distance) break;
-    const Pose& pose = poses_[static_cast<std::size_t>(i)];
-    const Vec3 local = pose.inverseTransform(p);
+  auto test = [&](int i) {
+    const auto bi = static_cast<std::size_t>(i);
+    if (bounds[bi] > best.distance) return;
+    const Vec3 local = poses_[bi].inverseTransform(p);
     int planeFace = 0;
     // Outside, the exact distance is at least the largest plane distance.
-    if (maxPlaneDistance(planes_[static_cast<std::size_t>(i)], local, &planeFace, best.distance) >
-        best.distance)
-      continue;
+    if (maxPlaneDistance(planes_[bi], local, &planeFace, best.distance) > best.distance) return;
     Vec3 closest;
     int face = -1;
-    const float sd = shapes_[static_cast<std::size_t>(i)]->query(local, &closest, &face);
+    const float sd = shapes_[bi]->query(local, &closest, &face);
     const float d = std::abs(sd);
     if (d < best.distance || (d == best.distance && i < best.body)) {
       best = {i, face, d, sd, closest};
     }
+  };
+  if (first < 0) return best;
+  test(first);
+  for (int i = 0; i < size(); ++i) {
+    if ((mask >> i & 1u) && i != first) test(i);
   }
   return best;
 }

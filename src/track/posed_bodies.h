@@ -39,8 +39,8 @@ class PosedBodies {
   Vec3 worldCentroid(int body) const { return centroids_[static_cast<std::size_t>(body)]; }
 
   // The body whose surface is nearest to p (world), among the bodies in mask. Exact:
-  // bodies are tried in order of a bounding-sphere lower bound, then of the face-plane
-  // bound below, and skipped once a bound exceeds the best distance found. Ties go to
+  // the body with the smallest bounding-sphere lower bound is tried first, then every
+  // other body whose sphere and face-plane bounds do not exceed the best distance found. Ties go to
   // the lower body index.
   SurfaceHit nearest(const Vec3& p, BodyMask mask = kAllBodies) const;
 
@@ -63,7 +63,6 @@ class PosedBodies {
   // distance > stopAbove (not the largest) once one plane is farther than that.
   static float maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
                                 float stopAbove = std::numeric_limits<float>::infinity());
-  int sortedBounds(const Vec3& p, BodyMask mask, std::pair<float, int>* order) const;
 
   std::vector<const physics::ConvexShape*> shapes_;
   std::vector<const physics::ConvexShape*> tableShapes_;  // shapes the tables were built for

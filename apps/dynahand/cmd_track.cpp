@@ -94,6 +94,7 @@ int runTrack(const TrackOptions& o) {
   track::TrackerSettings settings;
   settings.hands = o.hands;
   settings.perFrame = o.perFrame;
+  settings.threads = o.threads;
   for (const auto& name : o.disable) {
     bool found = false;
     for (int k = 0; k < track::kStrategyCount; ++k) {
@@ -239,7 +240,7 @@ const CommandRegistration kRegistration{Command{
                      "gt (ground truth of the first frame), auto, or a pose JSONL file");
       sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));
       sub.add_option("--threads", o->threads,
-                     "worker threads (results are identical for any count)")
+                     "threads the simulations of a frame run on (results are identical for any count)")
           ->check(CLI::Range(1, 64));
       sub.add_option("--start", o->start, "first frame")->check(CLI::NonNegativeNumber);
       sub.add_option("--frames", o->frames, "number of frames (default: all)")

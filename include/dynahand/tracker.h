@@ -30,6 +30,9 @@ const char* strategyName(StrategyKind kind);  // "normal", "gross_motion", ...
 struct TrackerSettings {
   CloudConfig cloud;  // filtering, segmentation, voxel size, planes
   int hands = 1;      // 1, or 2 (k-means split, paper "Tracking of Multiple Hands")
+  // Threads the simulations of a frame run on (1: the caller's only). Results are the same
+  // bits for any count: each simulation has its own copy of the hand.
+  int threads = 1;
   // Strategies to run, by StrategyKind (ablations switch some off).
   std::array<bool, kStrategyCount> strategies = {true, true, true, true, true};
   int substeps = 3;                // physics steps per frame per simulation

@@ -34,29 +34,37 @@ SimulationSettings simulationSettings(const TrackerSettings& s) {
 
 Result<std::unique_ptr<HandTracker>> HandTracker::create(const model::ArticulatedModel& model,
                                                          model::Side side,
-                                                         const TrackerSettings& settings) {
+                                                         const TrackerSettings& settings,
+                                                         WorkerPool* pool) {
   RigSettings rigSettings;
   rigSettings.velocityRetention = settings.velocityRetention;
   auto rig = HandRig::create(model, worldSettings(settings), rigSettings, settings.stepDt);
   if (!rig) return rig.error();
-  return std::unique_ptr<HandTracker>(new HandTracker(model, side, settings, std::move(*rig)));
+  return std::unique_ptr<HandTracker>(
+      new HandTracker(model, side, settings, std::move(*rig), pool));
 }
 
 HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
-                         const TrackerSettings& settings, HandRig rig)
+                         const TrackerSettings& settings, HandRig rig, WorkerPool* pool)
     : model_(&model),
       side_(side),
       settings_(settings),
       rig_(std::move(rig)),
-      simulator_(simulationSettings(settings)) {
+      simulator_(simulationSettings(settings)),
+      pool_(pool) {
+  // Room for every row a frame can make: points + labels + boundary rows.
+  const int rows = settings_.cloud.maxVoxels + 64 + 17 * settings_.cloud.planes.planeCount;
+  rig_.world().reserveRows(rows);
+  // One lane per strategy, each with its own copy of the rig, so the simulations can run
+  // on any thread and give the same result on all of them.
   for (int k = 0; k < kStrategyCount; ++k) {
-    if (settings_.strategies[static_cast<std::size_t>(k)])
-      strategies_.push_back(makeStrategy(static_cast<StrategyKind>(k)));
+    if (!settings_.strategies[static_cast<std::size_t>(k)]) continue;
+    lanes_.push_back(std::make_unique<Lane>(Lane{rig_, Simulator(simulationSettings(settings)),
+                                                 makeStrategy(static_cast<StrategyKind>(k)), {}, {}, {}}));
+    lanes_.back()->rig.world().reserveRows(rows);
   }
   openAngles_ = model::zeroAngles(model);
   model::clampToLimits(model, openAngles_);
-  // Room for every row a frame can make: points + labels + boundary rows.
-  rig_.world().reserveRows(settings_.cloud.maxVoxels + 64 + 17 * settings_.cloud.planes.planeCount);
 }
 
 void HandTracker::initialize(const model::ModelPose& pose) {
@@ -70,13 +78,18 @@ void HandTracker::reset() {
   badFrames_ = 0;
 }
 
-float HandTracker::evaluate(const HandFrame& frame) {
-  simulator_.pose(rig_, posed_);
+float HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
+                           PosedBodies& posed, ErrorBreakdown& error) {
+  simulator.pose(rig, posed);
   const CloudFrame* cloud = frame.cloud;
   computeError(
-      posed_, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); },
-      error_);
-  return error_.total;
+      posed, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); },
+      error);
+  return error.total;
+}
+
+float HandTracker::evaluate(const HandFrame& frame) {
+  return evaluate(simulator_, rig_, frame, posed_, error_);
 }
 
 void HandTracker::track(const HandFrame& frame, HandResult& out) {
@@ -111,7 +124,6 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
 
 void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   auto& world = rig_.world();
-  simulator_.beginFrame();
   world.saveState(start_);
   rig_.readPose(pose_);
   const int forearm = rig_.anatomy().forearm;
@@ -119,39 +131,51 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   const AxisHold hold{forearm, Vec3::Zero(), forearmPose.p,
                       forearmPose.rotate(rig_.anatomy().forearmAxis), settings_.forearmHoldForce};
   model::jointAnglesInto(*model_, pose_, startAngles_);
-  float bestError = std::numeric_limits<float>::infinity();
-  StrategyKind bestKind = StrategyKind::Normal;
-  for (auto& strategy : strategies_) {
-    world.restoreState(start_);
-    StrategyContext context{rig_,
-                            simulator_,
-                            FrameInput{frame.points,
-                                       frame.planes,
-                                       {},
-                                       frame.cloud,
-                                       settings_.forearmHoldForce > 0.0f ? &hold : nullptr},
+  const FrameInput input{frame.points, frame.planes, {}, frame.cloud,
+                         settings_.forearmHoldForce > 0.0f ? &hold : nullptr};
+  // Every simulation's first substep maps the points at the same poses: once, shared.
+  simulator_.mapFrameStart(rig_, input);
+  auto runLane = [&](int index) {
+    Lane& lane = *lanes_[static_cast<std::size_t>(index)];
+    lane.rig.world().restoreState(start_);
+    lane.simulator.beginFrame(&simulator_);
+    StrategyContext context{lane.rig,
+                            lane.simulator,
+                            input,
                             settings_.substeps,
                             frame.time,
                             settings_.flipPeriodS,
                             frame.detection,
                             &startAngles_};
-    Candidate candidate;
-    candidate.kind = strategy->kind();
-    candidate.ran = strategy->run(context);
-    if (candidate.ran) {
-      candidate.error = evaluate(frame);
-      if (candidate.error < bestError) {
-        bestError = candidate.error;
-        bestKind = candidate.kind;
-        world.saveState(best_);
-        bestBreakdown_ = error_;
-      }
-      if (settings_.keepCandidates) rig_.readPose(candidate.pose);
-    }
-    out.candidates.push_back(std::move(candidate));
+    Candidate& candidate = lane.candidate;
+    candidate.kind = lane.strategy->kind();
+    candidate.error = 0.0f;
+    candidate.ran = lane.strategy->run(context);
+    if (!candidate.ran) return;
+    candidate.error = evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error);
+    if (settings_.keepCandidates) lane.rig.readPose(candidate.pose);
+  };
+  const int count = static_cast<int>(lanes_.size());
+  if (pool_ != nullptr) {
+    pool_->run(count, runLane);
+  } else {
+    for (int i = 0; i < count; ++i) runLane(i);
   }
-  if (std::isfinite(bestError)) {
-    world.restoreState(best_);
+  // The winner, in strategy order (ties to the earlier strategy).
+  float bestError = std::numeric_limits<float>::infinity();
+  StrategyKind bestKind = StrategyKind::Normal;
+  const Lane* best = nullptr;
+  for (const auto& lane : lanes_) {
+    if (lane->candidate.ran && lane->candidate.error < bestError) {
+      bestError = lane->candidate.error;
+      bestKind = lane->candidate.kind;
+      best = lane.get();
+    }
+    out.candidates.push_back(lane->candidate);
+  }
+  if (best != nullptr) {
+    world.restoreState(best->rig.world().state());
+    bestBreakdown_ = best->error;
   } else {  // no simulation ran (all switched off): measure the state as it is
     evaluate(frame);
     bestBreakdown_ = error_;

@@ -12,6 +12,7 @@
 #include "track/hand_rig.h"
 #include "track/simulation.h"
 #include "track/strategies/strategy.h"
+#include "track/worker_pool.h"
 
 namespace dynahand::track {
 
@@ -27,7 +28,8 @@ class HandTracker {
  public:
   static Result<std::unique_ptr<HandTracker>> create(const model::ArticulatedModel& model,
                                                      model::Side side,
-                                                     const TrackerSettings& settings);
+                                                     const TrackerSettings& settings,
+                                                     WorkerPool* pool = nullptr);
   void initialize(const model::ModelPose& pose);
   void reset();
   bool tracked() const { return tracked_; }
@@ -36,8 +38,11 @@ class HandTracker {
 
  private:
   HandTracker(const model::ArticulatedModel& model, model::Side side,
-              const TrackerSettings& settings, HandRig rig);
-  float evaluate(const HandFrame& frame);
+              const TrackerSettings& settings, HandRig rig, WorkerPool* pool);
+  // The paper's error of the rig's current state (writes posed and error).
+  static float evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
+                        PosedBodies& posed, ErrorBreakdown& error);
+  float evaluate(const HandFrame& frame);  // of rig_, into error_
   void runStrategies(const HandFrame& frame, HandResult& out);
   void acquire(const HandFrame& frame, HandResult& out);
   // The open hand placed at the cloud: fingers along axisImage (wrist -> tips), thumb
@@ -50,8 +55,18 @@ class HandTracker {
   model::Side side_;
   TrackerSettings settings_;
   HandRig rig_;
-  Simulator simulator_;
-  std::vector<std::unique_ptr<Strategy>> strategies_;
+  Simulator simulator_;  // acquisition, and the frame-start mapping the lanes share
+  // One simulation strategy with everything it writes to while it runs.
+  struct Lane {
+    HandRig rig;
+    Simulator simulator;
+    std::unique_ptr<Strategy> strategy;
+    PosedBodies posed;
+    ErrorBreakdown error;
+    Candidate candidate;
+  };
+  std::vector<std::unique_ptr<Lane>> lanes_;
+  WorkerPool* pool_ = nullptr;  // runs the lanes; null: in order on the caller
   physics::WorldState start_, best_;
   model::ModelPose pose_;
   model::JointAngles startAngles_;

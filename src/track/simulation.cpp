@@ -30,10 +30,45 @@ void Simulator::pose(const HandRig& rig, PosedBodies& bodies) {
   bodies.set(shapes_, poses_);
 }
 
-void Simulator::beginFrame() {
+void Simulator::beginFrame(const Simulator* shared) {
   frameStart_.clear();
   frameStartPoses_.clear();
   frameStartPoints_ = nullptr;
+  shared_ = shared;
+}
+
+void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
+  beginFrame();
+  pose(rig, bodies_);
+  mapPoints(rig, input);
+  frameStart_ = attachments_;
+  frameStartPoses_ = poses_;
+  frameStartPoints_ = input.points.data();
+}
+
+Simulator::Attachment Simulator::map(const HandRig& rig, const Vec3& p, BodyMask mask,
+                                     bool anyDistance, int* hint) const {
+  Attachment a;
+  const SurfaceHit hit = bodies_.nearestPlanar(p, mask, hint ? *hint : -1);
+  if (hint) *hint = hit.body;
+  if (hit.body < 0 || (!anyDistance && hit.distance > settings_.maxAttachDistance)) return a;
+  const Pose& pose = bodies_.pose(hit.body);
+  const Vec3& localNormal =
+      bodies_.shape(hit.body).faces()[static_cast<std::size_t>(hit.face)].normal;
+  // The forearm's elbow-side end is where the arm was cut off, not a surface.
+  if (hit.body == rig.anatomy().forearm && localNormal.dot(rig.anatomy().forearmAxis) > kCutEndCos)
+    return a;
+  a.body = hit.body;
+  a.localPoint = hit.localPoint;
+  a.normal = pose.rotate(localNormal);
+  return a;
+}
+
+void Simulator::mapPoints(const HandRig& rig, const FrameInput& input) {
+  hints_.resize(input.points.size(), -1);
+  attachments_.resize(input.points.size());
+  for (std::size_t i = 0; i < input.points.size(); ++i)
+    attachments_[i] = map(rig, input.points[i], kAllBodies, false, &hints_[i]);
 }
 
 void Simulator::addRows(HandRig& rig, const FrameInput& input) {
@@ -45,24 +80,6 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
   if (total == 0) return;
   const float cap = settings_.pullForce * settings_.stepDt / static_cast<float>(total);
 
-  hints_.resize(input.points.size(), -1);
-  const int forearm = rig.anatomy().forearm;
-  const Vec3 forearmAxis = rig.anatomy().forearmAxis;
-  auto map = [&](const Vec3& p, BodyMask mask, bool anyDistance, int* hint) {
-    Attachment a;
-    const SurfaceHit hit = bodies_.nearestPlanar(p, mask, hint ? *hint : -1);
-    if (hint) *hint = hit.body;
-    if (hit.body < 0 || (!anyDistance && hit.distance > settings_.maxAttachDistance)) return a;
-    const Pose& pose = bodies_.pose(hit.body);
-    const Vec3& localNormal =
-        bodies_.shape(hit.body).faces()[static_cast<std::size_t>(hit.face)].normal;
-    // The forearm's elbow-side end is where the arm was cut off, not a surface.
-    if (hit.body == forearm && localNormal.dot(forearmAxis) > kCutEndCos) return a;
-    a.body = hit.body;
-    a.localPoint = hit.localPoint;
-    a.normal = pose.rotate(localNormal);
-    return a;
-  };
   auto attach = [&](const Attachment& a, const Vec3& p, float rowCap) {
     if (a.body < 0) return;
     // A face turned away from the camera cannot have produced this sample: the body
@@ -74,21 +91,22 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
     }
   };
   // Every simulation of a frame starts from the same state, so the first substep's mapping
-  // is the same for all of them: computed once (poses compared bit for bit).
-  const bool sameAsFrameStart = !frameStart_.empty() && frameStartPoints_ == input.points.data() &&
-                                frameStart_.size() == input.points.size() &&
-                                std::equal(poses_.begin(), poses_.end(), frameStartPoses_.begin(),
-                                           frameStartPoses_.end(), samePose);
+  // is the same for all of them: computed once (poses compared bit for bit), here or by
+  // the simulator this one shares it with.
+  const Simulator& start = shared_ != nullptr ? *shared_ : *this;
+  const bool sameAsFrameStart =
+      !start.frameStart_.empty() && start.frameStartPoints_ == input.points.data() &&
+      start.frameStart_.size() == input.points.size() &&
+      std::equal(poses_.begin(), poses_.end(), start.frameStartPoses_.begin(),
+                 start.frameStartPoses_.end(), samePose);
   if (sameAsFrameStart) {
     for (std::size_t i = 0; i < input.points.size(); ++i)
-      attach(frameStart_[i], input.points[i], cap);
+      attach(start.frameStart_[i], input.points[i], cap);
   } else {
-    const bool keep = frameStart_.empty() && frameStartPoints_ == nullptr;
-    attachments_.resize(input.points.size());
-    for (std::size_t i = 0; i < input.points.size(); ++i) {
-      attachments_[i] = map(input.points[i], kAllBodies, false, &hints_[i]);
+    const bool keep = shared_ == nullptr && frameStart_.empty() && frameStartPoints_ == nullptr;
+    mapPoints(rig, input);
+    for (std::size_t i = 0; i < input.points.size(); ++i)
       attach(attachments_[i], input.points[i], cap);
-    }
     if (keep) {
       frameStart_ = attachments_;
       frameStartPoses_ = poses_;
@@ -96,7 +114,7 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
     }
   }
   for (const LabelledPoint& l : input.labelled)
-    attach(map(l.point, l.bodies, true, nullptr), l.point, cap * l.capScale);
+    attach(map(rig, l.point, l.bodies, true, nullptr), l.point, cap * l.capScale);
 
   if (input.cloud != nullptr && settings_.silhouetteForce > 0.0f) {
     const float tipCap = settings_.silhouetteForce * settings_.stepDt;

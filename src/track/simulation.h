@@ -62,31 +62,39 @@ class Simulator {
 
   // A new frame: forgets the first mapping kept for the frame's simulations (the first
   // mapping after this call is kept and reused by any later substep starting from the same
-  // poses on the same points).
-  void beginFrame();
+  // poses on the same points). With `shared`, that simulator's kept mapping is used
+  // instead (it must outlive the frame's runs and not change during them).
+  void beginFrame(const Simulator* shared = nullptr);
+  // Computes and keeps the mapping of the frame's points at the rig's current poses, for
+  // the simulators that share it.
+  void mapFrameStart(const HandRig& rig, const FrameInput& input);
   // Runs `substeps` physics steps of the rig on the frame's data.
   void run(HandRig& rig, const FrameInput& input, int substeps);
   // Refreshes `bodies` from the rig's current poses.
   void pose(const HandRig& rig, PosedBodies& bodies);
 
  private:
-  void addRows(HandRig& rig, const FrameInput& input);
-
-  SimulationSettings settings_;
-  PosedBodies bodies_;
-  std::vector<const physics::ConvexShape*> shapes_;
-  std::vector<Pose> poses_;
-  std::vector<int> hints_;  // (points) body each point attached to last pass
   // Where a sample point attaches: a body (-1: none), the face point and its world normal.
   struct Attachment {
     int body = -1;
     Vec3 localPoint = Vec3::Zero();
     Vec3 normal = Vec3::Zero();
   };
+  void addRows(HandRig& rig, const FrameInput& input);
+  Attachment map(const HandRig& rig, const Vec3& p, BodyMask mask, bool anyDistance,
+                 int* hint) const;
+  void mapPoints(const HandRig& rig, const FrameInput& input);  // into attachments_
+
+  SimulationSettings settings_;
+  PosedBodies bodies_;
+  std::vector<const physics::ConvexShape*> shapes_;
+  std::vector<Pose> poses_;
+  std::vector<int> hints_;  // (points) body each point attached to last pass
   std::vector<Attachment> attachments_;
   std::vector<Attachment> frameStart_;  // the frame's first mapping (see beginFrame)
   std::vector<Pose> frameStartPoses_;
   const Vec3* frameStartPoints_ = nullptr;
+  const Simulator* shared_ = nullptr;  // whose frame-start mapping to use (see beginFrame)
 };
 
 }  // namespace dynahand::track

@@ -7,6 +7,7 @@
 
 #include "track/finger_detector.h"
 #include "track/hand_tracker.h"
+#include "track/worker_pool.h"
 
 namespace dynahand::track {
 
@@ -36,6 +37,7 @@ struct Tracker::Impl {
   HandSplitter splitter;
   HandSplit split;
   FingerDetector detector;
+  std::unique_ptr<WorkerPool> pool;       // null with one thread
   std::unique_ptr<HandTracker> hands[2];  // [0] right, [1] left
   std::vector<Vec3> handPoints[2];
   TrackResult result;
@@ -46,7 +48,8 @@ struct Tracker::Impl {
         intrinsics(k),
         right(rightHand),
         left(model::mirrorModel(rightHand)),
-        pipeline(k, s.cloud) {}
+        pipeline(k, s.cloud),
+        pool(s.threads > 1 ? std::make_unique<WorkerPool>(s.threads) : nullptr) {}
 };
 
 Tracker::Tracker(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -60,14 +63,15 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
     return Error{"invalid camera intrinsics"};
   }
   if (settings.hands != 1 && settings.hands != 2) return Error{"hands must be 1 or 2"};
+  if (settings.threads < 1 || settings.threads > 64) return Error{"threads must be 1..64"};
   if (settings.substeps < 1 || settings.iterations < 1)
     return Error{"substeps and iterations must be >= 1"};
   auto impl = std::make_unique<Impl>(rightHand, intrinsics, settings);
-  auto right = HandTracker::create(impl->right, model::Side::Right, settings);
+  auto right = HandTracker::create(impl->right, model::Side::Right, settings, impl->pool.get());
   if (!right) return right.error();
   impl->hands[0] = std::move(*right);
   if (settings.hands == 2) {
-    auto left = HandTracker::create(impl->left, model::Side::Left, settings);
+    auto left = HandTracker::create(impl->left, model::Side::Left, settings, impl->pool.get());
     if (!left) return left.error();
     impl->hands[1] = std::move(*left);
   }

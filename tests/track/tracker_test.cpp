@@ -57,25 +57,39 @@ TEST(Tracker, FollowsSlowWave) {
   EXPECT_EQ(run.trackedFrames, run.frames);
 }
 
-TEST(Tracker, IsDeterministic) {
+// Same input, same output bits: twice on one thread, and with the simulations spread over
+// three threads (every simulation's pose, not only the winner's).
+TEST(Tracker, IsDeterministicForAnyThreadCount) {
   synth::SynthOptions o;
   o.clip = "wave";
   o.frameCount = 6;
   auto seq = synth::SyntheticSequence::create(o);
   ASSERT_TRUE(seq.ok());
-  std::uint64_t hashes[2];
-  for (auto& hash : hashes) {
-    auto tracker = Tracker::create(seq->model(0), seq->intrinsics());
+  std::uint64_t hashes[3];
+  const int threads[3] = {1, 1, 3};
+  for (int run = 0; run < 3; ++run) {
+    TrackerSettings settings;
+    settings.threads = threads[run];
+    auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
     ASSERT_TRUE(tracker.ok());
     Fnv1a h;
+    int candidates = 0;
     for (int f = 0; f < 6; ++f) {
       const auto& frame = seq->frame(f);
       if (f == 0) (*tracker)->initialize(frame.hands[0].pose);
-      for (const Pose& p : (*tracker)->track(frame.depth).hands[0].pose.bodies) h.add(p);
+      const HandResult& hand = (*tracker)->track(frame.depth).hands[0];
+      for (const Pose& p : hand.pose.bodies) h.add(p);
+      for (const Candidate& c : hand.candidates) {
+        h.add(c.error);
+        for (const Pose& p : c.pose.bodies) h.add(p);
+        candidates += c.ran ? 1 : 0;
+      }
     }
-    hash = h.value();
+    EXPECT_GE(candidates, 6 * 4) << "most simulations ran";
+    hashes[run] = h.value();
   }
   EXPECT_EQ(hashes[0], hashes[1]);
+  EXPECT_EQ(hashes[0], hashes[2]) << "three threads give other bits than one";
 }
 
 TEST(Tracker, EmptyFramesMeanLostNotACrash) {
@@ -101,6 +115,9 @@ TEST(Tracker, RejectsBadSettings) {
   s.hands = 3;
   EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, s).ok());
   EXPECT_FALSE(Tracker::create(hand, Intrinsics{0, 240, 300, 300, 160, 120}).ok());
+  TrackerSettings noThreads;
+  noThreads.threads = 0;
+  EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, noThreads).ok());
 }
 
 }  // namespace

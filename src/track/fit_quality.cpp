@@ -30,12 +30,14 @@ bool onMask(const CloudFrame& cloud, float uf, float vf, int extra = 0) {
 }  // namespace
 
 FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const Vec3> points,
-                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips) {
+                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips,
+                             std::span<const int> nearestHints) {
   FitQuality q;
   if (!points.empty()) {
     int near = 0;
-    for (const Vec3& p : points) {
-      const SurfaceHit hit = bodies.nearest(p);
+    const bool hinted = nearestHints.size() == points.size();
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const SurfaceHit hit = bodies.nearest(points[k], kAllBodies, hinted ? nearestHints[k] : -1);
       if (hit.body >= 0 && hit.distance <= kNearSurfaceM) ++near;
     }
     q.dataNearModel = static_cast<float>(near) / static_cast<float>(points.size());

@@ -14,8 +14,10 @@ namespace dynahand::track {
 
 // bodies: the fitted model; points: the hand's sample points; skipBody: a body left out of
 // the model-side share (the forearm, cut by segmentation), -1 for none; tips: the five
-// fingertip keypoints.
+// fingertip keypoints; nearestHints: optional per-point first guesses of the nearest body
+// (only speed depends on them).
 FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const Vec3> points,
-                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips);
+                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips,
+                             std::span<const int> nearestHints = {});
 
 }  // namespace dynahand::track

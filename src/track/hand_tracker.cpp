@@ -116,7 +116,8 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     std::array<Vec3, 5> tips;
     for (std::size_t f = 0; f < 5; ++f) tips[f] = out.keypoints21[4 + 4 * f];
     out.quality =
-        measureFitQuality(posed_, frame.points, *frame.cloud, rig_.anatomy().forearm, tips);
+        measureFitQuality(posed_, frame.points, *frame.cloud, rig_.anatomy().forearm, tips,
+                          simulator_.lastNearestBodies());
   } else {
     out.quality = FitQuality{};
   }

@@ -200,6 +200,13 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
     m.handJoints[j] = m.world.addJoint(def);
     m.jointTorque[j] =
         jointTorqueFor(hand.bodies()[static_cast<std::size_t>(joint.child)].name, scene.hand);
+    // A spring-damper, not a velocity servo: a servo reaches its torque cap at the smallest
+    // error, so fingers and thumb squeezing an object from both sides each pushed with their
+    // full cap and the object, between two unbalanced constant forces, was shaken loose
+    // within a second. With a spring the digits settle where their torques balance.
+    if (scene.hand.jointSpringAngle > 0.0f)
+      m.world.setJointDriveSpring(m.handJoints[j], m.jointTorque[j] / scene.hand.jointSpringAngle,
+                                  scene.hand.jointDampingRatio);
   }
   // No self-collision: the tracker already keeps its bones apart, and poses such as a tight
   // fist touch bone to bone, where contacts would fight the drives and spring the fingers open.

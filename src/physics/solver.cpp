@@ -472,7 +472,7 @@ void World::step(float h) {
                         rows_.lower[i],
                         rows_.upper[i]};
   }
-  m.surfaceBatches.build(m.surfaceRows, static_cast<int>(slotCount), dummy);
+  m.surfaceBatches.build(m.surfaceRows, m.solverBodies, dummy);
 
   // --- Warm start, solve with bias, integrate positions, relax. ---
   for (const Row& r : m.rows) {

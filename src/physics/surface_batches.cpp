@@ -12,7 +12,7 @@
 
 namespace dynahand::physics {
 namespace {
-constexpr int kWays = 4;
+constexpr int kSpread = 4;
 }  // namespace
 
 void SurfaceBatches::reserve(int rows) {
@@ -21,8 +21,9 @@ void SurfaceBatches::reserve(int rows) {
   order_.reserve(n);
 }
 
-void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows, int slotCount,
-                           int dummySlot) {
+void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
+                           const std::vector<SolverBody>& bodies, int dummySlot) {
+  const int slotCount = static_cast<int>(bodies.size());
   const int n = static_cast<int>(rows.size());
   const auto slots = static_cast<std::size_t>(slotCount);
   // Rows grouped by slot (counting sort, stable), slots by decreasing row count.
@@ -55,14 +56,10 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows, int slot
                                  : start_[static_cast<std::size_t>(slotsByCount_[0]) + 1] -
                                        start_[static_cast<std::size_t>(slotsByCount_[0])];
   // Deal the rows, slot after slot, down the columns of a (batches x 4) table: a slot's run
-  // is at most `batchCount` long, so its rows land in different batches.
-  // Consecutive dealt batches hold the same slots (one long dependency chain through the
-  // bodies' velocities), so they are stored kWays apart: batches next to each other in the
-  // sweep then touch different bodies and the CPU overlaps them.
-  const int dealt = std::max((n + 3) / 4, largest);
-  const int batchCount = (dealt + kWays - 1) / kWays * kWays;
-  const int stride = batchCount / kWays;
-  auto storedAt = [&](int j) { return (j % stride) * kWays + j / stride; };
+  // is at most `batchCount` long, so its rows land in different batches, and each lane of
+  // the sweep stays on one slot for a long run of batches (solve() keeps that slot's
+  // velocities in registers until the lane moves on).
+  const int batchCount = std::max((n + 3) / 4, largest);
   batches_.resize(static_cast<std::size_t>(batchCount));
   for (Batch& b : batches_) {
     for (int k = 0; k < 4; ++k) {
@@ -70,16 +67,31 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows, int slot
       b.row[k] = -1;
       b.nx[k] = b.ny[k] = b.nz[k] = b.ax[k] = b.ay[k] = b.az[k] = 0.0f;
       b.ix[k] = b.iy[k] = b.iz[k] = 0.0f;
+      b.ux[k] = b.uy[k] = b.uz[k] = 0.0f;
       b.effMass[k] = b.bias[k] = b.relaxBias[k] = b.lower[k] = b.upper[k] = b.impulse[k] = 0.0f;
     }
   }
   int position = 0;
   for (const int slot : slotsByCount_) {
-    for (int o = start_[static_cast<std::size_t>(slot)];
-         o < start_[static_cast<std::size_t>(slot) + 1]; ++o, ++position) {
+    const int first = start_[static_cast<std::size_t>(slot)];
+    const int count = start_[static_cast<std::size_t>(slot) + 1] - first;
+    // A slot's rows (in input order, i.e. scanline order of the points) taken every
+    // kSpread-th: Gauss-Seidel then alternates between parts of the body instead of
+    // sweeping it from one side to the other.
+    for (int t = 0; t < count; ++t, ++position) {
+      // t-th of: offsets 0, kSpread, 2 kSpread, ..., then 1, 1 + kSpread, ...
+      int o = first, left = t;
+      for (int residue = 0; residue < kSpread; ++residue) {
+        const int inClass = (count - residue + kSpread - 1) / kSpread;
+        if (left < inClass) {
+          o += residue + left * kSpread;
+          break;
+        }
+        left -= inClass;
+      }
       const int i = order_[static_cast<std::size_t>(o)];
       const PreparedSurfaceRow& r = rows[static_cast<std::size_t>(i)];
-      Batch& b = batches_[static_cast<std::size_t>(storedAt(position % batchCount))];
+      Batch& b = batches_[static_cast<std::size_t>(position % batchCount)];
       const int k = position / batchCount;
       b.slot[k] = r.slot;
       b.row[k] = i;
@@ -93,6 +105,9 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows, int slot
       b.iy[k] = r.invIAng.y();
       b.iz[k] = r.invIAng.z();
       b.effMass[k] = r.effMass;
+      b.ux[k] = r.normal.x() * bodies[static_cast<std::size_t>(r.slot)].invMass;
+      b.uy[k] = r.normal.y() * bodies[static_cast<std::size_t>(r.slot)].invMass;
+      b.uz[k] = r.normal.z() * bodies[static_cast<std::size_t>(r.slot)].invMass;
       b.bias[k] = r.bias;
       b.relaxBias[k] = r.relaxBias;
       b.lower[k] = r.lower;
@@ -108,52 +123,86 @@ void SurfaceBatches::writeImpulses(float* impulses) const {
 }
 
 #if defined(__SSE__)
+namespace {
 // SolverBody starts with (v, invMass) and (w, pad): one unaligned load each per lane, and a
 // 4x4 transpose turns four bodies into x, y, z (and invMass) registers.
+struct LaneBodies {
+  __m128 vx, vy, vz, invMass, wx, wy, wz, pad;
+  void load(float* const p[4]) {
+    vx = _mm_loadu_ps(p[0]);
+    vy = _mm_loadu_ps(p[1]);
+    vz = _mm_loadu_ps(p[2]);
+    invMass = _mm_loadu_ps(p[3]);
+    _MM_TRANSPOSE4_PS(vx, vy, vz, invMass);
+    wx = _mm_loadu_ps(p[0] + 4);
+    wy = _mm_loadu_ps(p[1] + 4);
+    wz = _mm_loadu_ps(p[2] + 4);
+    pad = _mm_loadu_ps(p[3] + 4);
+    _MM_TRANSPOSE4_PS(wx, wy, wz, pad);
+  }
+  // Padding lanes share the dummy slot; their values never change, so any store order works.
+  void store(float* const p[4]) const {
+    __m128 a = vx, b = vy, c = vz, d = invMass;
+    _MM_TRANSPOSE4_PS(a, b, c, d);
+    _mm_storeu_ps(p[0], a);
+    _mm_storeu_ps(p[1], b);
+    _mm_storeu_ps(p[2], c);
+    _mm_storeu_ps(p[3], d);
+    a = wx, b = wy, c = wz, d = pad;
+    _MM_TRANSPOSE4_PS(a, b, c, d);
+    _mm_storeu_ps(p[0] + 4, a);
+    _mm_storeu_ps(p[1] + 4, b);
+    _mm_storeu_ps(p[2] + 4, c);
+    _mm_storeu_ps(p[3] + 4, d);
+  }
+};
+}  // namespace
+
+// Each lane of the sweep runs down its column, mostly on one slot for many batches in a
+// row: the four bodies stay in registers and are written back (and the next four read)
+// only when some lane moves to another slot. The chain through a body's velocity is then
+// the row arithmetic alone; the impulse's clamp target is formed off that chain.
 void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
   static_assert(offsetof(SolverBody, invMass) == 12 && offsetof(SolverBody, w) == 16);
+  if (batches_.empty()) return;
+  float* p[4];
+  __m128i slots = _mm_load_si128(reinterpret_cast<const __m128i*>(batches_[0].slot));
+  for (int k = 0; k < 4; ++k) p[k] = bodies[static_cast<std::size_t>(batches_[0].slot[k])].v.data();
+  LaneBodies lane;
+  lane.load(p);
   for (Batch& b : batches_) {
-    float* p[4];
-    for (int k = 0; k < 4; ++k) p[k] = bodies[static_cast<std::size_t>(b.slot[k])].v.data();
-    __m128 vx = _mm_loadu_ps(p[0]), vy = _mm_loadu_ps(p[1]), vz = _mm_loadu_ps(p[2]),
-           invMass = _mm_loadu_ps(p[3]);
-    _MM_TRANSPOSE4_PS(vx, vy, vz, invMass);
-    __m128 wx = _mm_loadu_ps(p[0] + 4), wy = _mm_loadu_ps(p[1] + 4), wz = _mm_loadu_ps(p[2] + 4),
-           pad = _mm_loadu_ps(p[3] + 4);
-    _MM_TRANSPOSE4_PS(wx, wy, wz, pad);
-
-    const __m128 nx = _mm_load_ps(b.nx), ny = _mm_load_ps(b.ny), nz = _mm_load_ps(b.nz);
-    const __m128 jv = _mm_add_ps(
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, vx), _mm_mul_ps(ny, vy)), _mm_mul_ps(nz, vz)),
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(b.ax), wx), _mm_mul_ps(_mm_load_ps(b.ay), wy)),
-                   _mm_mul_ps(_mm_load_ps(b.az), wz)));
+    const __m128i next = _mm_load_si128(reinterpret_cast<const __m128i*>(b.slot));
+    if (_mm_movemask_epi8(_mm_cmpeq_epi32(next, slots)) != 0xFFFF) {
+      lane.store(p);
+      for (int k = 0; k < 4; ++k) p[k] = bodies[static_cast<std::size_t>(b.slot[k])].v.data();
+      lane.load(p);
+      slots = next;
+    }
+    const __m128 effMass = _mm_load_ps(b.effMass);
     const __m128 old = _mm_load_ps(b.impulse);
-    const __m128 bias = _mm_load_ps(useBias ? b.bias : b.relaxBias);
-    const __m128 target = _mm_sub_ps(old, _mm_mul_ps(_mm_load_ps(b.effMass), _mm_add_ps(jv, bias)));
-    const __m128 clamped =
-        _mm_min_ps(_mm_max_ps(target, _mm_load_ps(b.lower)), _mm_load_ps(b.upper));
+    // old - effMass bias: independent of the velocities, so not on the chain.
+    const __m128 base =
+        _mm_sub_ps(old, _mm_mul_ps(effMass, _mm_load_ps(useBias ? b.bias : b.relaxBias)));
+    const __m128 jv = _mm_add_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(b.nx), lane.vx),
+                              _mm_mul_ps(_mm_load_ps(b.ny), lane.vy)),
+                   _mm_mul_ps(_mm_load_ps(b.nz), lane.vz)),
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(b.ax), lane.wx),
+                              _mm_mul_ps(_mm_load_ps(b.ay), lane.wy)),
+                   _mm_mul_ps(_mm_load_ps(b.az), lane.wz)));
+    const __m128 clamped = _mm_min_ps(
+        _mm_max_ps(_mm_sub_ps(base, _mm_mul_ps(effMass, jv)), _mm_load_ps(b.lower)),
+        _mm_load_ps(b.upper));
     _mm_store_ps(b.impulse, clamped);
     const __m128 d = _mm_sub_ps(clamped, old);
-    const __m128 dm = _mm_mul_ps(d, invMass);
-    vx = _mm_add_ps(vx, _mm_mul_ps(dm, nx));
-    vy = _mm_add_ps(vy, _mm_mul_ps(dm, ny));
-    vz = _mm_add_ps(vz, _mm_mul_ps(dm, nz));
-    wx = _mm_add_ps(wx, _mm_mul_ps(d, _mm_load_ps(b.ix)));
-    wy = _mm_add_ps(wy, _mm_mul_ps(d, _mm_load_ps(b.iy)));
-    wz = _mm_add_ps(wz, _mm_mul_ps(d, _mm_load_ps(b.iz)));
-
-    _MM_TRANSPOSE4_PS(vx, vy, vz, invMass);
-    _MM_TRANSPOSE4_PS(wx, wy, wz, pad);
-    // Padding lanes share the dummy slot; their values are unchanged, so any store order works.
-    _mm_storeu_ps(p[0], vx);
-    _mm_storeu_ps(p[1], vy);
-    _mm_storeu_ps(p[2], vz);
-    _mm_storeu_ps(p[3], invMass);
-    _mm_storeu_ps(p[0] + 4, wx);
-    _mm_storeu_ps(p[1] + 4, wy);
-    _mm_storeu_ps(p[2] + 4, wz);
-    _mm_storeu_ps(p[3] + 4, pad);
+    lane.vx = _mm_add_ps(lane.vx, _mm_mul_ps(d, _mm_load_ps(b.ux)));
+    lane.vy = _mm_add_ps(lane.vy, _mm_mul_ps(d, _mm_load_ps(b.uy)));
+    lane.vz = _mm_add_ps(lane.vz, _mm_mul_ps(d, _mm_load_ps(b.uz)));
+    lane.wx = _mm_add_ps(lane.wx, _mm_mul_ps(d, _mm_load_ps(b.ix)));
+    lane.wy = _mm_add_ps(lane.wy, _mm_mul_ps(d, _mm_load_ps(b.iy)));
+    lane.wz = _mm_add_ps(lane.wz, _mm_mul_ps(d, _mm_load_ps(b.iz)));
   }
+  lane.store(p);
 }
 #else
 void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
@@ -163,12 +212,12 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
       const Vec3 n(b.nx[k], b.ny[k], b.nz[k]);
       const float jv = n.dot(body.v) + Vec3(b.ax[k], b.ay[k], b.az[k]).dot(body.w);
       const float old = b.impulse[k];
-      const float clamped = std::min(
-          std::max(old - b.effMass[k] * (jv + (useBias ? b.bias[k] : b.relaxBias[k])), b.lower[k]),
-          b.upper[k]);
+      const float base = old - b.effMass[k] * (useBias ? b.bias[k] : b.relaxBias[k]);
+      const float clamped =
+          std::min(std::max(base - b.effMass[k] * jv, b.lower[k]), b.upper[k]);
       const float d = clamped - old;
       b.impulse[k] = clamped;
-      body.v += (body.invMass * d) * n;
+      body.v += d * Vec3(b.ux[k], b.uy[k], b.uz[k]);
       body.w += d * Vec3(b.ix[k], b.iy[k], b.iz[k]);
     }
   }

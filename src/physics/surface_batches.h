@@ -25,7 +25,9 @@ struct PreparedSurfaceRow {
 class SurfaceBatches {
  public:
   // Packs the rows; `dummySlot` is a slot that never moves (padding lanes point at it).
-  void build(const std::vector<PreparedSurfaceRow>& rows, int slotCount, int dummySlot);
+  // bodies: the solver slots (their inverse masses are folded into the rows).
+  void build(const std::vector<PreparedSurfaceRow>& rows, const std::vector<SolverBody>& bodies,
+             int dummySlot);
   // One sweep over every row, with the position bias (solve) or the relax bias.
   void solve(std::vector<SolverBody>& bodies, bool useBias);
   // The accumulated impulse of every row, in the order given to build().
@@ -37,6 +39,7 @@ class SurfaceBatches {
     int slot[4];
     int row[4];  // index in build()'s input; -1 for padding
     float nx[4], ny[4], nz[4], ax[4], ay[4], az[4], ix[4], iy[4], iz[4];
+    float ux[4], uy[4], uz[4];  // normal * the body's inverse mass
     float effMass[4], bias[4], relaxBias[4], lower[4], upper[4], impulse[4];
   };
   std::vector<Batch> batches_;

@@ -16,13 +16,16 @@ bool inFreeSpace(const Vec3& point, const DepthFrame& depth, const Intrinsics& i
 }
 
 void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
-                  const FreeSpaceTest& isFree, ErrorBreakdown& out) {
+                  const FreeSpaceTest& isFree, ErrorBreakdown& out,
+                  std::span<const int> nearestHints) {
   const auto n = static_cast<std::size_t>(bodies.size());
   out.fit.assign(n, 0.0f);
   out.occlusion.assign(n, 0.0f);
   out.pointCount.assign(n, 0);
-  for (const Vec3& p : points) {
-    const SurfaceHit hit = bodies.nearest(p);
+  const bool hinted = nearestHints.size() == points.size();
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Vec3& p = points[k];
+    const SurfaceHit hit = bodies.nearest(p, kAllBodies, hinted ? nearestHints[k] : -1);
     if (hit.body < 0) continue;
     const auto i = static_cast<std::size_t>(hit.body);
     out.fit[i] = std::max(out.fit[i], hit.distance);

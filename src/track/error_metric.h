@@ -29,8 +29,11 @@ struct ErrorBreakdown {
 // isFree(p): whether the camera saw the space at p (camera frame) to be empty, e.g.
 // CloudFrame::isFree or inFreeSpace below.
 using FreeSpaceTest = std::function<bool(const Vec3&)>;
+// nearestHints: optional, per point a body likely nearest (e.g. the simulation's last
+// mapping); it only speeds the queries up, the result is the same without it.
 void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
-                  const FreeSpaceTest& isFree, ErrorBreakdown& out);
+                  const FreeSpaceTest& isFree, ErrorBreakdown& out,
+                  std::span<const int> nearestHints = {});
 
 // True when the pixel under `point` shows background farther than it or no data,
 // i.e. the point sits in space the camera saw to be empty. False outside the image.

@@ -84,7 +84,7 @@ float HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const Hand
   const CloudFrame* cloud = frame.cloud;
   computeError(
       posed, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); },
-      error);
+      error, simulator.lastNearestBodies());
   return error.total;
 }
 

@@ -155,7 +155,7 @@ SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) co
   return best;
 }
 
-SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
+SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {
   // Bounding-sphere lower bounds; the body with the smallest goes first for a tight best
   // distance, then every other body whose bound does not exceed it (index order: ties
   // still go to the lower index, as the answer is the same in any order).
@@ -185,9 +185,11 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask) const {
     }
   };
   if (first < 0) return best;
-  test(first);
+  if (hint < 0 || hint >= size() || !(mask >> hint & 1u)) hint = first;
+  test(hint);
+  if (hint != first) test(first);
   for (int i = 0; i < size(); ++i) {
-    if ((mask >> i & 1u) && i != first) test(i);
+    if ((mask >> i & 1u) && i != first && i != hint) test(i);
   }
   return best;
 }

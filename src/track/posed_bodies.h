@@ -41,8 +41,9 @@ class PosedBodies {
   // The body whose surface is nearest to p (world), among the bodies in mask. Exact:
   // the body with the smallest bounding-sphere lower bound is tried first, then every
   // other body whose sphere and face-plane bounds do not exceed the best distance found. Ties go to
-  // the lower body index.
-  SurfaceHit nearest(const Vec3& p, BodyMask mask = kAllBodies) const;
+  // the lower body index. hint: a body likely to be the answer, tried first (-1: none); the
+  // result does not depend on it.
+  SurfaceHit nearest(const Vec3& p, BodyMask mask = kAllBodies, int hint = -1) const;
 
   // The fast variant the surface constraints use: the distance to a body is its largest
   // face-plane distance (exact inside a body and wherever the foot of the perpendicular

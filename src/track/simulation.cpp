@@ -137,6 +137,9 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
     // BoundaryPlane keeps points with normal·p <= 0: the allowed side of the world
     // plane (-normal)·x >= 0.
     for (int b = 0; b < world.bodyCount(); ++b) {
+      // The forearm leaves the segmented region: its unobserved part lies outside the
+      // planes, which would turn it to point along the view ray (70 degrees off).
+      if (b == rig.anatomy().forearm) continue;
       world.addBoundary(b, -plane.normal, 0.0f, boundaryCap, settings_.boundaryMargin);
     }
   }

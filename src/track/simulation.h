@@ -72,6 +72,9 @@ class Simulator {
   void run(HandRig& rig, const FrameInput& input, int substeps);
   // Refreshes `bodies` from the rig's current poses.
   void pose(const HandRig& rig, PosedBodies& bodies);
+  // Per point of the last mapping pass, its nearest body by the planar query (-1: none):
+  // a good first guess for exact nearest-body queries at a nearby pose.
+  std::span<const int> lastNearestBodies() const { return hints_; }
 
  private:
   // Where a sample point attaches: a body (-1: none), the face point and its world normal.

@@ -57,6 +57,15 @@ TEST(Tracker, FollowsSlowWave) {
   EXPECT_EQ(run.trackedFrames, run.frames);
 }
 
+// The fingers curl into a fist and open again: the hand must not slide down the arm over the
+// curled fingers (it did while boundary planes pushed the forearm, cut by the segmentation,
+// to point away from the camera).
+TEST(Tracker, FollowsSlowOpenClose) {
+  const ClipRun run = runClip("open-close", 80, 0.5f);
+  EXPECT_LT(run.meanErrorM, 0.010f);
+  EXPECT_EQ(run.trackedFrames, run.frames);
+}
+
 // Same input, same output bits: twice on one thread, and with the simulations spread over
 // three threads (every simulation's pose, not only the winner's).
 TEST(Tracker, IsDeterministicForAnyThreadCount) {

@@ -205,6 +205,12 @@ class World {
   // maxTorque (N m): closes the angle error over max(timeConstant, dt) seconds.
   void setJointDrive(JointId j, const Quat& targetRelative, float maxTorque,
                      float timeConstant = 0);
+  // Makes the joint's drive a torsional spring-damper: torque = stiffness x angle error
+  // (N m/rad) with the given damping ratio, still capped at maxTorque (solved as a soft row,
+  // Box2D v3's soft step, so it is stable for any stiffness). Two drives pressing on one
+  // object from both sides then reach a force balance instead of fighting at their caps.
+  // stiffness 0 restores the velocity servo of setJointDrive.
+  void setJointDriveSpring(JointId j, float stiffness, float dampingRatio = 1.0f);
   void clearJointDrive(JointId j);
 
   // Drives a body's frame towards a world pose with |force| <= maxForce (N) and |torque| <=

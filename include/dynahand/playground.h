@@ -67,7 +67,11 @@ struct HandDriveSettings {
                                     // the contact margin in playground.cpp)
   float fingerMaxTorque = 0.6f;     // N m, finger MCP joints (PIP 60 %, DIP 35 %)
   float thumbMaxTorque = 0.8f;      // N m, thumb CMC (MCP 60 %, IP 35 %)
-  float jointTimeConstant = 0.04f;  // s
+  float jointTimeConstant = 0.04f;  // s (unused while jointSpringAngle > 0)
+  // Joint drives are springs (World::setJointDriveSpring) reaching their torque cap at this
+  // angle error (rad): stiffness = cap / jointSpringAngle. 0: velocity servos (time constant).
+  float jointSpringAngle = 2.0f;
+  float jointDampingRatio = 1.0f;
 };
 
 // View navigation: while the tracked palm is within `edgeMargin` (fraction of the image half

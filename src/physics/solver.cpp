@@ -69,8 +69,9 @@ inline void solveRow(std::vector<SolverBody>& sb, std::vector<Row>& rows, Row& r
   SolverBody& b = sb[static_cast<std::size_t>(r.slotB)];
   if (r.angular) {  // joint limits, cones, joint drives: half the work of a general row
     const float jv = r.angA.dot(a.w) + r.angB.dot(b.w);
-    const float target = useBias ? r.impulse - r.effMass * (jv + r.bias)
-                                 : r.impulse - r.effMass * (jv + r.relaxBias);
+    const float target =
+        useBias ? r.impulse - r.effMass * r.massScale * (jv + r.bias) - r.impulseScale * r.impulse
+                : r.impulse - r.effMass * (jv + r.relaxBias);
     const float clamped = std::clamp(target, r.lower, r.upper);
     const float d = clamped - r.impulse;
     r.impulse = clamped;
@@ -312,9 +313,20 @@ void World::step(float h) {
     const Eigen::AngleAxisf aa(err);
     const Vec3 relVel = aa.axis() * (aa.angle() / std::max(j.driveTimeConstant, h));
     const float tMax = j.driveMaxTorque * h;
+    const Vec3 error = aa.axis() * aa.angle();  // rad, desired relative to actual
     for (int k = 0; k < 3; ++k) {
       const Vec3 e = Vec3::Unit(k);
       rb.add(sa, sb, Vec3::Zero(), -e, e, {-relVel[k], 0.0f}, -tMax, tMax, 0.0f, false);
+      Row& r = m.rows.back();
+      if (j.driveStiffness > 0.0f && r.effMass > 0.0f) {
+        // Spring k and damping ratio zeta on this row's effective inertia I: omega^2 = k / I.
+        // The soft step settles at error = torque / k whatever I is.
+        const float omega = std::sqrt(j.driveStiffness / r.effMass);
+        const Softness soft = makeSoft(omega / (2.0f * 3.14159265f), j.driveDampingRatio, h);
+        r.bias = -soft.biasRate * error[k];
+        r.massScale = soft.massScale;
+        r.impulseScale = soft.impulseScale;
+      }
     }
   }
   // Angular cones: angle(uA, uB) <= maxAngle, one-sided.

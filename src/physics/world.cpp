@@ -236,6 +236,13 @@ void World::setJointDrive(JointId j, const Quat& targetRelative, float maxTorque
   c.driveTimeConstant = timeConstant;
 }
 
+void World::setJointDriveSpring(JointId j, float stiffness, float dampingRatio) {
+  assert(stiffness >= 0.0f && dampingRatio >= 0.0f);
+  JointConfig& c = impl_->joints[static_cast<std::size_t>(j)];
+  c.driveStiffness = stiffness;
+  c.driveDampingRatio = dampingRatio;
+}
+
 void World::clearJointDrive(JointId j) {
   impl_->joints[static_cast<std::size_t>(j)].driveEnabled = false;
 }

@@ -80,6 +80,8 @@ struct JointConfig {
   Quat driveTarget = Quat::Identity();  // relative joint rotation
   float driveMaxTorque = 0.0f;          // N m
   float driveTimeConstant = 0.0f;       // s
+  float driveStiffness = 0.0f;          // N m/rad; 0: velocity servo (time constant)
+  float driveDampingRatio = 1.0f;       // of the spring when driveStiffness > 0
 };
 
 struct ConeConfig {

@@ -166,7 +166,8 @@ SceneSpec readScene(const Json& root) {
     objectAt(*v, "hand");
     checkKeys(*v, "hand",
               {"palmMaxForce", "palmMaxTorque", "palmTimeConstant", "palmMaxSpeed",
-               "fingerMaxTorque", "thumbMaxTorque", "jointTimeConstant"});
+               "fingerMaxTorque", "thumbMaxTorque", "jointTimeConstant", "jointSpringAngle",
+               "jointDampingRatio"});
     HandDriveSettings& h = s.hand;
     readNumber(*v, "hand", "palmMaxForce", h.palmMaxForce, true);
     readNumber(*v, "hand", "palmMaxTorque", h.palmMaxTorque, true);
@@ -177,6 +178,9 @@ SceneSpec readScene(const Json& root) {
     readNumber(*v, "hand", "fingerMaxTorque", h.fingerMaxTorque, true);
     readNumber(*v, "hand", "thumbMaxTorque", h.thumbMaxTorque, true);
     readNumber(*v, "hand", "jointTimeConstant", h.jointTimeConstant, true);
+    readNumber(*v, "hand", "jointSpringAngle", h.jointSpringAngle);
+    if (h.jointSpringAngle < 0.0f) throw FormatError{"hand.jointSpringAngle", "must be >= 0"};
+    readNumber(*v, "hand", "jointDampingRatio", h.jointDampingRatio, true);
   }
   if (const Json* v = optional(root, "navigation")) {
     objectAt(*v, "navigation");

@@ -109,6 +109,31 @@ TEST(JointDrive, TorqueLimitBoundsTheMotion) {
   EXPECT_GT(h.world.jointAngles(h.joint).x(), 0.3f * bound);
 }
 
+// A spring drive (setJointDriveSpring) holding a bone out sideways under gravity settles
+// where the spring balances the load: stiffness x angle = m g d cos(angle), d the centre of
+// mass's distance from the joint, whatever the bone's inertia. The velocity servo (no
+// spring) holds the same bone within a degree of its target.
+TEST(JointDrive, SpringSettlesWhereItBalancesTheLoad) {
+  for (const float stiffness : {1.0f, 4.0f}) {
+    Hinge h = makeJointScene(Vec3(-1, -1, -1), Vec3(1, 1, 1));
+    h.world.settings().gravity = Vec3(0, -9.81f, 0);
+    h.world.setJointDrive(h.joint, Quat::Identity(), 10.0f, 0.05f);
+    h.world.setJointDriveSpring(h.joint, stiffness, 1.0f);
+    for (int i = 0; i < 240; ++i) h.world.step(kDt);
+    const float d = h.world.bodyShape(h.child).centroid().x();  // the joint is at x = 0
+    const float load = h.world.mass(h.child) * 9.81f * d;
+    float angle = load / stiffness;  // small-angle start, then the fixed point with cos
+    for (int k = 0; k < 20; ++k) angle = load * std::cos(angle) / stiffness;
+    const float measured = h.world.jointAngles(h.joint).norm();
+    EXPECT_NEAR(measured, angle, 0.03f * angle) << "stiffness " << stiffness;
+  }
+  Hinge servo = makeJointScene(Vec3(-1, -1, -1), Vec3(1, 1, 1));
+  servo.world.settings().gravity = Vec3(0, -9.81f, 0);
+  servo.world.setJointDrive(servo.joint, Quat::Identity(), 10.0f, 0.05f);
+  for (int i = 0; i < 240; ++i) servo.world.step(kDt);
+  EXPECT_LT(servo.world.jointAngles(servo.joint).norm(), 1.0f * kDeg);
+}
+
 TEST(AngularCone, KeepsAxesWithinTenDegrees) {
   Hinge h = makeJointScene(Vec3(-2, -1, -1), Vec3(2, 1, 1));
   const float maxAngle = 10.0f * kDeg;

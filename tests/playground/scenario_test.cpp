@@ -55,10 +55,9 @@ struct RunCounter {
   }
 };
 
-// DISABLED: does not pass yet. Ground truth lifts the box 16.4 cm but holds it 0.73 s; the
-// tracker loses the hand while the fingers curl (19 mm mean keypoint error, the tracked hand
-// slides back along the forearm), 2.8 cm lifted (docs/playground.md, "Status").
-TEST(Scenario, DISABLED_GraspLiftAndHoldABox) {
+// The power grasp closes fingers and thumb around the box from above; the joint drives are
+// springs, so the digits squeeze it to a force balance (docs/playground.md).
+TEST(Scenario, GraspLiftAndHoldABox) {
   auto pg = build("grasp");
   ASSERT_NE(pg, nullptr);
   const int box = pg->bodyIndex("box");
@@ -77,9 +76,8 @@ TEST(Scenario, DISABLED_GraspLiftAndHoldABox) {
   EXPECT_GE(held.longest, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
 }
 
-// DISABLED: does not pass yet. Ground truth lifts the bar 17.6 cm and holds it 1.9 s, but it
-// slides 5.8 cm along its axis; with the tracker 10.3 cm, held 0.03 s (docs/playground.md).
-TEST(Scenario, DISABLED_BarbellPickedUpByTheBarDoesNotSlipSideways) {
+// The same clip grasps the barbell's bar between the end caps.
+TEST(Scenario, BarbellPickedUpByTheBarDoesNotSlipSideways) {
   auto pg = build("barbell");
   ASSERT_NE(pg, nullptr);
   const int bar = pg->bodyIndex("barbell/bar");

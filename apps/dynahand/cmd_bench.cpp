@@ -117,7 +117,7 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
   return interrupted() ? 130 : kExitOk;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kBenchCommand{Command{
     "bench", "run the standard accuracy and speed suite and write docs/benchmarks.md",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<BenchOptions>();

@@ -13,7 +13,7 @@ std::string joined(const std::vector<std::string>& items) {
   return text.empty() ? "none" : text;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kCamerasCommand{Command{
     "cameras", "list connected depth cameras", [](CLI::App& sub) -> std::function<int()> {
       auto details = std::make_shared<bool>(false);
       sub.add_flag("--details", *details, "open each camera and print its depth stream intrinsics");

@@ -132,7 +132,7 @@ int runDemo(const DemoOptions& o) {
   return kExitOk;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kDemoCommand{Command{
     "demo", "synthesise built-in clips, track and evaluate them, write a contact sheet",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<DemoOptions>();

@@ -65,7 +65,7 @@ int runEval(const EvalOptions& o) {
   return kExitOk;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kEvalCommand{Command{
     "eval", "measure 21-keypoint accuracy of tracked poses against ground truth",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<EvalOptions>();

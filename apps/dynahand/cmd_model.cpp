@@ -10,7 +10,7 @@
 namespace dynahand::cli {
 namespace {
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kModelCommand{Command{
     "model", "write the default hand (any size, either side) or a converted model as a model file",
     [](CLI::App& sub) -> std::function<int()> {
       struct Flags {

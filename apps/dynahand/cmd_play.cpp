@@ -274,7 +274,7 @@ int runPlay(const PlayOptions& o) {
   return interrupted() ? 130 : kExitOk;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kPlayCommand{Command{
     "play", "drive a physics playground scene with a tracked (or recorded) hand",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<PlayOptions>();

@@ -91,7 +91,7 @@ int record(const RecordOptions& options) {
   return status;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kRecordCommand{Command{
     "record", "record a depth camera to a sequence folder",
     [](CLI::App& sub) -> std::function<int()> {
       auto options = std::make_shared<RecordOptions>();

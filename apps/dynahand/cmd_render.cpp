@@ -229,7 +229,7 @@ int runRender(const RenderOptions& o) {
   return interrupted() ? 130 : kExitOk;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kRenderCommand{Command{
     "render", "draw tracked poses over their depth frames (PNG frames, MP4, contact sheet)",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<RenderOptions>();

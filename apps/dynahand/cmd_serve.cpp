@@ -82,7 +82,7 @@ int runServe(ServeCommandOptions o) {
   return interrupted() ? 130 : kExitOk;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kServeCommand{Command{
     "serve", "track an input and show it live in the browser (and stream the poses)",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<ServeCommandOptions>();

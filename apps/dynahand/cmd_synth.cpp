@@ -25,7 +25,7 @@ void listClipsAndProfiles() {
   std::printf("\n");
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kSynthCommand{Command{
     "synth", "write a synthetic depth sequence of a moving hand with exact ground truth",
     [](CLI::App& sub) -> std::function<int()> {
       struct Flags {

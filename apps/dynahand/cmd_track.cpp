@@ -218,7 +218,7 @@ int runTrack(const TrackOptions& o) {
   return interrupted() ? 130 : kExitOk;
 }
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kTrackCommand{Command{
     "track", "track hands in a depth recording and write their poses",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<TrackOptions>();

@@ -7,7 +7,7 @@
 namespace dynahand::cli {
 namespace {
 
-const CommandRegistration kRegistration{Command{
+const CommandRegistration kVersionCommand{Command{
     "version", "print the version and build information",
     [](CLI::App& sub) -> std::function<int()> {
       sub.footer("Example:\n  dynahand version");

@@ -14,4 +14,8 @@ Pose interpolate(const Pose& a, const Pose& b, float t) {
   return {a.p + (b.p - a.p) * t, a.q.slerp(t, b.q).normalized()};
 }
 
+Quat shortestRotationOpposite(const Vec3& from, const Vec3& to) {
+  return Quat::FromTwoVectors(from, to);
+}
+
 }  // namespace dynahand

@@ -5,14 +5,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dynahand/overlay.h"
+#include "eval/rgb_mat.h"
 
 namespace dynahand::eval {
 
 namespace {
 
-cv::Mat wrap(RgbImage& image) {
-  return cv::Mat(image.height, image.width, CV_8UC3, image.pixels.data());
-}
+using detail::wrap;
+
 cv::Point2f pixelf(const Intrinsics& k, const Vec3& p) {
   const Vec2 uv = k.project(p);
   return {uv.x(), uv.y()};

@@ -4,17 +4,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "eval/rgb_mat.h"
+
 namespace dynahand::eval {
 
 namespace {
 
-cv::Mat wrap(RgbImage& image) {
-  return cv::Mat(image.height, image.width, CV_8UC3, image.pixels.data());
-}
-cv::Mat wrap(const RgbImage& image) {
-  return cv::Mat(image.height, image.width, CV_8UC3,
-                 const_cast<std::uint8_t*>(image.pixels.data()));
-}
+using detail::wrap;
+
 cv::Scalar scalar(Rgb c) {
   return cv::Scalar(c.r, c.g, c.b);
 }  // images are RGB in memory

@@ -20,7 +20,7 @@ namespace {
 using detail::FormatError;
 using nlohmann::json;
 
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+using detail::degreesToRadians;
 
 const char* const kHandBodyNames[17] = {
     "forearm",        "palm",          "thumb_metacarpal", "thumb_proximal",  "thumb_distal",
@@ -34,10 +34,6 @@ int index(const json& v, const std::string& path, size_t count) {
   if (i < 0 || i >= static_cast<long long>(count))
     throw FormatError{path, fmt::format("index {} out of range [0, {})", i, count)};
   return static_cast<int>(i);
-}
-
-Vec3 degreesToRadians(const Vec3& d) {
-  return (d.cast<double>() / kDegPerRad).cast<float>();
 }
 
 // Quaternion stored x, y, z, w.

@@ -2,8 +2,10 @@
 // and pose readers; FormatError is caught at the reader's top level and turned into an Error.
 #pragma once
 
+#include <charconv>
 #include <cmath>
 #include <initializer_list>
+#include <numbers>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -63,6 +65,23 @@ inline float number(const nlohmann::json& v, const std::string& path) {
 inline Vec3 vec3(const nlohmann::json& v, const std::string& path) {
   if (!v.is_array() || v.size() != 3) throw FormatError{path, "expected [x, y, z]"};
   return {number(v[0], path + "[0]"), number(v[1], path + "[1]"), number(v[2], path + "[2]")};
+}
+
+// Angles are stored in degrees by the model formats and kept in radians inside.
+inline constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+
+inline Vec3 degreesToRadians(const Vec3& deg) {
+  return Vec3(static_cast<float>(static_cast<double>(deg.x()) / kDegPerRad),
+              static_cast<float>(static_cast<double>(deg.y()) / kDegPerRad),
+              static_cast<float>(static_cast<double>(deg.z()) / kDegPerRad));
+}
+
+// Shortest text that reads back as the same float.
+inline std::string num(float v) {
+  if (v == 0.0f) v = 0.0f;  // "-0" would read back as the integer 0 and lose its sign
+  char buf[32];
+  const auto result = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, result.ptr);
 }
 
 inline Quat quatWxyz(const nlohmann::json& v, const std::string& path) {

@@ -9,7 +9,7 @@
 namespace dynahand::model {
 namespace {
 
-const char* const kFingers[4] = {"index", "middle", "ring", "pinky"};
+const char* const kFingerNames[4] = {"index", "middle", "ring", "pinky"};
 
 // An OpenXR joint: placed at `at`, +z from `to` back toward `from` (the bone direction).
 struct XrJointRule {
@@ -25,7 +25,7 @@ std::array<XrJointRule, 26> xrRules() {
   rules[4] = {"thumb_ip", "thumb_ip", "thumb_tip"};
   rules[5] = {"thumb_tip", "thumb_ip", "thumb_tip"};
   for (int f = 0; f < 4; ++f) {
-    const std::string n = kFingers[f];
+    const std::string n = kFingerNames[f];
     const size_t base = 6 + 5 * static_cast<size_t>(f);
     rules[base + 0] = {n + "_cmc", n + "_cmc", n + "_mcp"};
     rules[base + 1] = {n + "_mcp", n + "_mcp", n + "_pip"};

@@ -46,7 +46,7 @@ Quat jointRotation(const Vec3& angles) {
   const float f = angles.x();
   const float a = angles.y();
   const Vec3 d(std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
-  const Quat swing = Quat::FromTwoVectors(Vec3::UnitZ(), d);
+  const Quat swing = shortestRotation(Vec3::UnitZ(), d);
   const Quat twist(std::cos(0.5f * angles.z()), 0.0f, 0.0f, std::sin(0.5f * angles.z()));
   return (swing * twist).normalized();
 }
@@ -56,7 +56,7 @@ Vec3 jointRotationAngles(const Quat& rotation) {
   const Vec3 d = q * Vec3::UnitZ();
   const float flexion = std::atan2(-d.y(), d.z());
   const float abduction = std::asin(std::clamp(d.x(), -1.0f, 1.0f));
-  const Quat twist = Quat::FromTwoVectors(Vec3::UnitZ(), d).conjugate() * q;
+  const Quat twist = shortestRotation(Vec3::UnitZ(), d).conjugate() * q;
   float angle = 2.0f * std::atan2(twist.z(), twist.w());
   constexpr float kPi = std::numbers::pi_v<float>;
   if (angle > kPi) angle -= 2.0f * kPi;

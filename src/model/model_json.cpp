@@ -19,14 +19,11 @@ namespace {
 using detail::FormatError;
 using nlohmann::json;
 
-constexpr const char* kFormatName = "dynahand-model";
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+using detail::degreesToRadians;
+using detail::kDegPerRad;
+using detail::num;
 
-Vec3 degreesToRadians(const Vec3& deg) {
-  return Vec3(static_cast<float>(static_cast<double>(deg.x()) / kDegPerRad),
-              static_cast<float>(static_cast<double>(deg.y()) / kDegPerRad),
-              static_cast<float>(static_cast<double>(deg.z()) / kDegPerRad));
-}
+constexpr const char* kModelFormatName = "dynahand-model";
 
 Handedness parseHandedness(const json& v, const std::string& path) {
   const std::string s = detail::string(v, path);
@@ -55,8 +52,8 @@ ModelSpec parseSpec(const json& doc) {
   checkKeys(doc, "",
             {"format", "version", "metadata", "bodies", "joints", "collision", "keypoints"});
   const std::string format = string(field(doc, "", "format"), "format");
-  if (format != kFormatName)
-    throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kFormatName)};
+  if (format != kModelFormatName)
+    throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kModelFormatName)};
   const json& version = field(doc, "", "version");
   if (!version.is_number_integer()) throw FormatError{"version", "expected an integer"};
   if (version.get<long long>() != kModelFormatVersion) {
@@ -146,13 +143,6 @@ ModelSpec parseSpec(const json& doc) {
   return spec;
 }
 
-// Shortest text that reads back as the same float.
-std::string num(float v) {
-  if (v == 0.0f) v = 0.0f;  // "-0" would read back as the integer 0 and lose its sign
-  char buf[32];
-  const auto result = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, result.ptr);
-}
 std::string vec(const Vec3& v) {
   return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]";
 }
@@ -201,7 +191,7 @@ std::string modelToJson(const ArticulatedModel& model) {
   std::string out;
   out += "{\n";
   out +=
-      fmt::format("  \"format\": \"{}\",\n  \"version\": {},\n", kFormatName, kModelFormatVersion);
+      fmt::format("  \"format\": \"{}\",\n  \"version\": {},\n", kModelFormatName, kModelFormatVersion);
   out += fmt::format(
       "  \"metadata\": {{\"name\": {}, \"handedness\": \"{}\", \"units\": \"m\", "
       "\"referenceLength\": {}}},\n",

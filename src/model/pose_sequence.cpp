@@ -16,22 +16,17 @@ namespace {
 using detail::FormatError;
 using nlohmann::json;
 
-constexpr const char* kFormatName = "dynahand-pose";
+using detail::num;
 
-std::string num(float v) {
-  if (v == 0.0f) v = 0.0f;  // "-0" would read back as the integer 0 and lose its sign
-  char buf[32];
-  const auto result = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, result.ptr);
-}
+constexpr const char* kPoseFormatName = "dynahand-pose";
 
 void parseHeader(const json& doc, PoseSequence& seq) {
   using namespace detail;
   objectAt(doc, "(header)");
   checkKeys(doc, "", {"format", "version", "bodies"});
   const std::string format = string(field(doc, "", "format"), "format");
-  if (format != kFormatName)
-    throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kFormatName)};
+  if (format != kPoseFormatName)
+    throw FormatError{"format", fmt::format("'{}' is not '{}'", format, kPoseFormatName)};
   const json& version = field(doc, "", "version");
   if (!version.is_number_integer() || version.get<long long>() != kPoseFormatVersion) {
     throw FormatError{"version", fmt::format("{} is not supported (this build reads version {})",
@@ -111,7 +106,7 @@ Result<PoseSequence> loadPoseSequence(const std::filesystem::path& path) {
 Status savePoseSequence(const PoseSequence& sequence, const std::filesystem::path& path) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) return Error{fmt::format("{}: cannot open for writing", path.string())};
-  out << fmt::format("{{\"format\": \"{}\", \"version\": {}, \"bodies\": {}}}\n", kFormatName,
+  out << fmt::format("{{\"format\": \"{}\", \"version\": {}, \"bodies\": {}}}\n", kPoseFormatName,
                      kPoseFormatVersion, json(sequence.bodyNames).dump());
   for (size_t f = 0; f < sequence.frames.size(); ++f) {
     const ModelPose& pose = sequence.frames[f];

@@ -23,7 +23,7 @@ Vec3 decomposeJointRotation(const Quat& relative) {
 Quat composeJointRotation(const Vec3& angles) {
   const float f = angles.x(), a = angles.y();
   const Vec3 d(std::cos(a) * std::cos(f), std::cos(a) * std::sin(f), -std::sin(a));
-  const Quat swing = Quat::FromTwoVectors(Vec3::UnitX(), d);
+  const Quat swing = shortestRotation(Vec3::UnitX(), d);
   const Quat twist(Eigen::AngleAxisf(angles.z(), Vec3::UnitX()));
   return (swing * twist).normalized();
 }

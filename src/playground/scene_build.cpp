@@ -91,7 +91,7 @@ void SceneBuilder::hinge(physics::BodyId mount, physics::BodyId child, const Vec
   def.child = child;
   def.anchorParent = world_.pose(mount).inverseTransform(hingePoint);
   def.anchorChild = anchorChild;
-  const Quat h = Quat::FromTwoVectors(Vec3::UnitZ(), o.axis);
+  const Quat h = shortestRotation(Vec3::UnitZ(), o.axis);
   def.frameParent = h;
   def.frameChild = (childRest.conjugate() * h).normalized();
   def.limitsEnabled = true;
@@ -152,7 +152,7 @@ Status SceneBuilder::addObject(const ObjectSpec& o) {
       const physics::BodyId mount =
           add(o.name + "/mount", ConvexShape::box(Vec3::Constant(0.01f)),
               {o.position - 0.01f * o.axis, Quat::Identity()}, 1.0f, true);
-      const Quat rest = (Quat::FromTwoVectors(Vec3::UnitX(), o.axis) * o.orientation).normalized();
+      const Quat rest = (shortestRotation(Vec3::UnitX(), o.axis) * o.orientation).normalized();
       const Quat q = (start * rest).normalized();
       const physics::BodyId knob =
           add(o.name + "/knob", cylinderShape(o.radius, o.length, kRoundSegments),

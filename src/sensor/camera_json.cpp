@@ -5,14 +5,14 @@
 #include <charconv>
 #include <cmath>
 
+#include "sensor/reader_error.h"
+
 namespace dynahand::sensor {
 namespace {
 
 using nlohmann::json;
 
-Error fail(const std::string& name, const std::string& problem) {
-  return Error{name + ": " + problem};
-}
+using detail::fail;
 
 std::string typeName(const json& value) {
   return value.type_name();

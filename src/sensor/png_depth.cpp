@@ -11,6 +11,8 @@
 #include <fstream>
 #include <system_error>
 
+#include "sensor/reader_error.h"
+
 namespace dynahand::sensor {
 namespace {
 
@@ -24,9 +26,7 @@ std::uint32_t readBigEndian32(const std::uint8_t* p) {
          p[3];
 }
 
-Error fail(const std::string& name, const std::string& problem) {
-  return Error{name + ": " + problem};
-}
+using detail::fail;
 
 // Decodes with OpenCV after the header was checked; returns the raw Mat.
 Result<cv::Mat> decode(std::span<const std::uint8_t> bytes, const std::string& name) {

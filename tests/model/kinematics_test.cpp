@@ -44,7 +44,7 @@ TEST(Kinematics, JointRotationIsSwingTwistInModelAxes) {
   const Quat r = jointRotation(Vec3(f, a, t));
   const Vec3 d(std::sin(a), -std::cos(a) * std::sin(f), std::cos(a) * std::cos(f));
   EXPECT_LT((r * Vec3::UnitZ() - d).norm(), 1e-6f);
-  const Quat swing = Quat::FromTwoVectors(Vec3::UnitZ(), d);
+  const Quat swing = shortestRotation(Vec3::UnitZ(), d);
   EXPECT_LT(angleBetween(r, swing * Quat(Eigen::AngleAxisf(t, Vec3::UnitZ()))), 1e-6f);
   EXPECT_LT((jointRotationAngles(r) - Vec3(f, a, t)).norm(), 1e-5f);
 }

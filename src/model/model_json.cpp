@@ -190,8 +190,8 @@ std::string modelToJson(const ArticulatedModel& model) {
   const ModelSpec spec = model.spec();
   std::string out;
   out += "{\n";
-  out +=
-      fmt::format("  \"format\": \"{}\",\n  \"version\": {},\n", kModelFormatName, kModelFormatVersion);
+  out += fmt::format("  \"format\": \"{}\",\n  \"version\": {},\n", kModelFormatName,
+                     kModelFormatVersion);
   out += fmt::format(
       "  \"metadata\": {{\"name\": {}, \"handedness\": \"{}\", \"units\": \"m\", "
       "\"referenceLength\": {}}},\n",

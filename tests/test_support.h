@@ -22,9 +22,13 @@ inline std::filesystem::path sharedDataDir() {
   if (dirVar.empty())                                                     \
   GTEST_SKIP() << "../shared/data not found (set DYNAHAND_SHARED_DIR); skipping data test"
 
-// A fresh scratch folder under the build tree for files a test writes.
+// A fresh scratch folder under the build tree for files a test writes, one per test (CTest
+// runs the tests of one program in parallel: a folder shared by name would be wiped by one
+// test while another writes into it).
 inline std::filesystem::path scratchDir(const std::string& name) {
   std::filesystem::path dir = std::filesystem::path(DYNAHAND_BINARY_DIR) / "test-scratch" / name;
+  if (const auto* test = ::testing::UnitTest::GetInstance()->current_test_info())
+    dir /= std::string(test->test_suite_name()) + "." + test->name();
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

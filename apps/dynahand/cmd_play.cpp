@@ -26,7 +26,8 @@ namespace {
 
 struct PlayOptions {
   std::string scene, input, out, framesDir, init = "auto";
-  float handLength = 0.19f, handWidth = 0.085f, fps = 30.0f;
+  HandModelOptions hand;  // built-in hand only (the virtual hand is built from it)
+  float fps = 30.0f;
   int frames = -1, renderEvery = 1;
   std::vector<float> eye, target;
   // --serve: the viewer page and stream, paced at the input's rate unless fast.
@@ -196,7 +197,7 @@ int runPlay(const PlayOptions& o) {
   if (!std::filesystem::exists(o.scene)) throw UsageError("scene not found: " + o.scene);
   auto scene = playground::loadScene(o.scene);
   if (!scene) throw UsageError(scene.message());
-  const model::ArticulatedModel hand = model::makeDefaultHand({o.handLength, o.handWidth});
+  const model::ArticulatedModel hand = handModel(o.hand);
   auto source = openSource(o, hand);
 
   playground::RenderView view;
@@ -297,10 +298,7 @@ const CommandRegistration kPlayCommand{Command{
           ->check(CLI::Range(1.0f, 1000.0f));
       sub.add_option("--frames", o->frames, "number of frames (default: all)")
           ->check(CLI::Range(1, 100000000));
-      sub.add_option("--hand-length", o->handLength, "wrist crease to middle fingertip, m")
-          ->check(CLI::Range(0.10f, 0.30f));
-      sub.add_option("--hand-width", o->handWidth, "palm width at the knuckles, m")
-          ->check(CLI::Range(0.05f, 0.15f));
+      addHandModelOptions(sub, o->hand, /*withModelFile=*/false);
       sub.add_flag("--serve", o->serve,
                    "show the scene live in the viewer page (dynahand serve's page and stream), "
                    "at the input's rate; Ctrl-C stops");

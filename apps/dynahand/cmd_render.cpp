@@ -25,8 +25,8 @@ namespace dynahand::cli {
 namespace {
 
 struct RenderOptions {
-  std::string poses, input, out, sheet, modelFile;
-  float handLength = 0.19f, handWidth = 0.085f;
+  std::string poses, input, out, sheet;
+  HandModelOptions hand;  // as given to track
   float sideAngleDeg = 90.0f, fps = 0.0f;
   int every = 1, sheetTiles = 12, sheetColumns = 4;
   bool candidates = true;
@@ -161,12 +161,7 @@ int runRender(const RenderOptions& o) {
   auto reader = SequenceReader::open(o.input);
   if (!reader) throw UsageError(reader.message());
   const SequenceInfo& info = reader->info();
-  model::ArticulatedModel right = model::makeDefaultHand({o.handLength, o.handWidth});
-  if (!o.modelFile.empty()) {
-    auto loaded = model::loadModel(o.modelFile);
-    if (!loaded) throw UsageError(loaded.message());
-    right = std::move(*loaded);
-  }
+  const model::ArticulatedModel right = handModel(o.hand);
   const model::ArticulatedModel left = model::mirrorModel(right);
   auto frames = io::readTrackJsonl(o.poses, right);
   if (!frames) throw UsageError(frames.message());
@@ -248,11 +243,7 @@ const CommandRegistration kRenderCommand{Command{
       sub.add_option("--side-angle", o->sideAngleDeg,
                      "side view: degrees around the hand about the image's vertical axis")
           ->check(CLI::Range(-180.0f, 180.0f));
-      sub.add_option("--model", o->modelFile, "hand model file used for tracking");
-      sub.add_option("--hand-length", o->handLength, "built-in hand: as given to track, m")
-          ->check(CLI::Range(0.10f, 0.30f));
-      sub.add_option("--hand-width", o->handWidth, "built-in hand: as given to track, m")
-          ->check(CLI::Range(0.05f, 0.15f));
+      addHandModelOptions(sub, o->hand);  // the model the poses were tracked with
       sub.add_flag("!--no-candidates", o->candidates, "leave out the losing simulations");
       sub.footer(
           "The losing simulations are drawn when the poses were tracked with --candidates.\n"

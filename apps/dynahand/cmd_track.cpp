@@ -19,8 +19,8 @@ namespace dynahand::cli {
 namespace {
 
 struct TrackOptions {
-  std::string input, out, csv, bvh, modelFile, init = "auto";
-  float handLength = 0.19f, handWidth = 0.085f;
+  std::string input, out, csv, bvh, init = "auto";
+  HandModelOptions hand;
   int hands = 1, threads = 1, start = 0, frames = -1;
   bool perFrame = false, candidates = false;
   std::vector<std::string> disable;
@@ -82,14 +82,7 @@ int runTrack(const TrackOptions& o) {
   }
   const SequenceInfo& info = in.info;
 
-  std::optional<model::ArticulatedModel> hand;
-  if (!o.modelFile.empty()) {
-    auto loaded = model::loadModel(o.modelFile);
-    if (!loaded) throw UsageError(loaded.message());
-    hand = std::move(*loaded);
-  } else {
-    hand = model::makeDefaultHand({o.handLength, o.handWidth});
-  }
+  std::optional<model::ArticulatedModel> hand = handModel(o.hand);
 
   track::TrackerSettings settings;
   settings.hands = o.hands;
@@ -230,17 +223,13 @@ const CommandRegistration kTrackCommand{Command{
                      "poses as JSON lines (.jsonl), CSV (.csv) or the original authors' .pose");
       sub.add_option("--csv", o->csv, "also write the 21 keypoints as CSV");
       sub.add_option("--bvh", o->bvh, "also write a BVH skeleton animation");
-      sub.add_option("--model", o->modelFile, "hand model file (default: the built-in hand)");
-      sub.add_option("--hand-length", o->handLength,
-                     "built-in hand: wrist crease to middle fingertip, m")
-          ->check(CLI::Range(0.10f, 0.30f));
-      sub.add_option("--hand-width", o->handWidth, "built-in hand: palm width at the knuckles, m")
-          ->check(CLI::Range(0.05f, 0.15f));
+      addHandModelOptions(sub, o->hand);
       sub.add_option("--init", o->init,
                      "gt (ground truth of the first frame), auto, or a pose JSONL file");
       sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));
-      sub.add_option("--threads", o->threads,
-                     "threads the simulations of a frame run on (results are identical for any count)")
+      sub.add_option(
+             "--threads", o->threads,
+             "threads the simulations of a frame run on (results are identical for any count)")
           ->check(CLI::Range(1, 64));
       sub.add_option("--start", o->start, "first frame")->check(CLI::NonNegativeNumber);
       sub.add_option("--frames", o->frames, "number of frames (default: all)")

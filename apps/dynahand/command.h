@@ -6,8 +6,11 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "dynahand/model.h"
 
 namespace dynahand::cli {
 
@@ -34,5 +37,18 @@ struct CommandRegistration {
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// --model / --hand-length / --hand-width: the hand model a recording is (or was) tracked with.
+struct HandModelOptions {
+  std::string modelFile;  // empty: the built-in hand at the size below
+  float length = 0.19f;   // wrist crease to middle fingertip, m
+  float width = 0.085f;   // palm width at the knuckles, m
+};
+// Adds the options to `sub`; --model only when withModelFile.
+void addHandModelOptions(CLI::App& sub, HandModelOptions& o, bool withModelFile = true);
+
+// The right hand's model: the file, or the built-in hand at the given size. A file that does
+// not load is a UsageError naming it.
+model::ArticulatedModel handModel(const HandModelOptions& o);
 
 }  // namespace dynahand::cli

@@ -72,47 +72,41 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     }
   }
   int position = 0;
+  auto deal = [&](int o) {
+    const int i = order_[static_cast<std::size_t>(o)];
+    const PreparedSurfaceRow& r = rows[static_cast<std::size_t>(i)];
+    Batch& b = batches_[static_cast<std::size_t>(position % batchCount)];
+    const int k = position / batchCount;
+    b.slot[k] = r.slot;
+    b.row[k] = i;
+    b.nx[k] = r.normal.x();
+    b.ny[k] = r.normal.y();
+    b.nz[k] = r.normal.z();
+    b.ax[k] = r.ang.x();
+    b.ay[k] = r.ang.y();
+    b.az[k] = r.ang.z();
+    b.ix[k] = r.invIAng.x();
+    b.iy[k] = r.invIAng.y();
+    b.iz[k] = r.invIAng.z();
+    b.effMass[k] = r.effMass;
+    const float invMass = bodies[static_cast<std::size_t>(r.slot)].invMass;
+    b.ux[k] = r.normal.x() * invMass;
+    b.uy[k] = r.normal.y() * invMass;
+    b.uz[k] = r.normal.z() * invMass;
+    b.bias[k] = r.bias;
+    b.relaxBias[k] = r.relaxBias;
+    b.lower[k] = r.lower;
+    b.upper[k] = r.upper;
+    ++position;
+  };
+  // A slot's rows (in input order, i.e. scanline order of the points) taken every kSpread-th:
+  // Gauss-Seidel then alternates between parts of the body instead of sweeping it from one
+  // side to the other.
   for (const int slot : slotsByCount_) {
     const int first = start_[static_cast<std::size_t>(slot)];
-    const int count = start_[static_cast<std::size_t>(slot) + 1] - first;
-    // A slot's rows (in input order, i.e. scanline order of the points) taken every
-    // kSpread-th: Gauss-Seidel then alternates between parts of the body instead of
-    // sweeping it from one side to the other.
-    for (int t = 0; t < count; ++t, ++position) {
-      // t-th of: offsets 0, kSpread, 2 kSpread, ..., then 1, 1 + kSpread, ...
-      int o = first, left = t;
-      for (int residue = 0; residue < kSpread; ++residue) {
-        const int inClass = (count - residue + kSpread - 1) / kSpread;
-        if (left < inClass) {
-          o += residue + left * kSpread;
-          break;
-        }
-        left -= inClass;
-      }
-      const int i = order_[static_cast<std::size_t>(o)];
-      const PreparedSurfaceRow& r = rows[static_cast<std::size_t>(i)];
-      Batch& b = batches_[static_cast<std::size_t>(position % batchCount)];
-      const int k = position / batchCount;
-      b.slot[k] = r.slot;
-      b.row[k] = i;
-      b.nx[k] = r.normal.x();
-      b.ny[k] = r.normal.y();
-      b.nz[k] = r.normal.z();
-      b.ax[k] = r.ang.x();
-      b.ay[k] = r.ang.y();
-      b.az[k] = r.ang.z();
-      b.ix[k] = r.invIAng.x();
-      b.iy[k] = r.invIAng.y();
-      b.iz[k] = r.invIAng.z();
-      b.effMass[k] = r.effMass;
-      b.ux[k] = r.normal.x() * bodies[static_cast<std::size_t>(r.slot)].invMass;
-      b.uy[k] = r.normal.y() * bodies[static_cast<std::size_t>(r.slot)].invMass;
-      b.uz[k] = r.normal.z() * bodies[static_cast<std::size_t>(r.slot)].invMass;
-      b.bias[k] = r.bias;
-      b.relaxBias[k] = r.relaxBias;
-      b.lower[k] = r.lower;
-      b.upper[k] = r.upper;
-    }
+    const int end = start_[static_cast<std::size_t>(slot) + 1];
+    for (int residue = 0; residue < kSpread; ++residue)
+      for (int o = first + residue; o < end; o += kSpread) deal(o);
   }
 }
 
@@ -183,16 +177,15 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
     // old - effMass bias: independent of the velocities, so not on the chain.
     const __m128 base =
         _mm_sub_ps(old, _mm_mul_ps(effMass, _mm_load_ps(useBias ? b.bias : b.relaxBias)));
-    const __m128 jv = _mm_add_ps(
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(b.nx), lane.vx),
-                              _mm_mul_ps(_mm_load_ps(b.ny), lane.vy)),
-                   _mm_mul_ps(_mm_load_ps(b.nz), lane.vz)),
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(b.ax), lane.wx),
-                              _mm_mul_ps(_mm_load_ps(b.ay), lane.wy)),
-                   _mm_mul_ps(_mm_load_ps(b.az), lane.wz)));
-    const __m128 clamped = _mm_min_ps(
-        _mm_max_ps(_mm_sub_ps(base, _mm_mul_ps(effMass, jv)), _mm_load_ps(b.lower)),
-        _mm_load_ps(b.upper));
+    const __m128 jv = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(b.nx), lane.vx),
+                                                       _mm_mul_ps(_mm_load_ps(b.ny), lane.vy)),
+                                            _mm_mul_ps(_mm_load_ps(b.nz), lane.vz)),
+                                 _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(b.ax), lane.wx),
+                                                       _mm_mul_ps(_mm_load_ps(b.ay), lane.wy)),
+                                            _mm_mul_ps(_mm_load_ps(b.az), lane.wz)));
+    const __m128 clamped =
+        _mm_min_ps(_mm_max_ps(_mm_sub_ps(base, _mm_mul_ps(effMass, jv)), _mm_load_ps(b.lower)),
+                   _mm_load_ps(b.upper));
     _mm_store_ps(b.impulse, clamped);
     const __m128 d = _mm_sub_ps(clamped, old);
     lane.vx = _mm_add_ps(lane.vx, _mm_mul_ps(d, _mm_load_ps(b.ux)));
@@ -213,8 +206,7 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
       const float jv = n.dot(body.v) + Vec3(b.ax[k], b.ay[k], b.az[k]).dot(body.w);
       const float old = b.impulse[k];
       const float base = old - b.effMass[k] * (useBias ? b.bias[k] : b.relaxBias[k]);
-      const float clamped =
-          std::min(std::max(base - b.effMass[k] * jv, b.lower[k]), b.upper[k]);
+      const float clamped = std::min(std::max(base - b.effMass[k] * jv, b.lower[k]), b.upper[k]);
       const float d = clamped - old;
       b.impulse[k] = clamped;
       body.v += d * Vec3(b.ux[k], b.uy[k], b.uz[k]);

@@ -23,6 +23,7 @@ physics::WorldSettings worldSettings(const TrackerSettings& s) {
 SimulationSettings simulationSettings(const TrackerSettings& s) {
   SimulationSettings sim;
   sim.substeps = s.substeps;
+  sim.pointSubsets = s.pointSubsets;
   sim.stepDt = s.stepDt;
   sim.pullForce = s.pullForce;
   sim.boundaryForce = s.boundaryForce;
@@ -59,8 +60,12 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
   // on any thread and give the same result on all of them.
   for (int k = 0; k < kStrategyCount; ++k) {
     if (!settings_.strategies[static_cast<std::size_t>(k)]) continue;
-    lanes_.push_back(std::make_unique<Lane>(Lane{rig_, Simulator(simulationSettings(settings)),
-                                                 makeStrategy(static_cast<StrategyKind>(k)), {}, {}, {}}));
+    lanes_.push_back(std::make_unique<Lane>(Lane{rig_,
+                                                 Simulator(simulationSettings(settings)),
+                                                 makeStrategy(static_cast<StrategyKind>(k)),
+                                                 {},
+                                                 {},
+                                                 {}}));
     lanes_.back()->rig.world().reserveRows(rows);
   }
   openAngles_ = model::zeroAngles(model);
@@ -79,7 +84,7 @@ void HandTracker::reset() {
 }
 
 float HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
-                           PosedBodies& posed, ErrorBreakdown& error) {
+                            PosedBodies& posed, ErrorBreakdown& error) {
   simulator.pose(rig, posed);
   const CloudFrame* cloud = frame.cloud;
   computeError(
@@ -115,9 +120,8 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     simulator_.pose(rig_, posed_);
     std::array<Vec3, 5> tips;
     for (std::size_t f = 0; f < 5; ++f) tips[f] = out.keypoints21[4 + 4 * f];
-    out.quality =
-        measureFitQuality(posed_, frame.points, *frame.cloud, rig_.anatomy().forearm, tips,
-                          simulator_.lastNearestBodies());
+    out.quality = measureFitQuality(posed_, frame.points, *frame.cloud, rig_.anatomy().forearm,
+                                    tips, simulator_.lastNearestBodies());
   } else {
     out.quality = FitQuality{};
   }
@@ -132,7 +136,10 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   const AxisHold hold{forearm, Vec3::Zero(), forearmPose.p,
                       forearmPose.rotate(rig_.anatomy().forearmAxis), settings_.forearmHoldForce};
   model::jointAnglesInto(*model_, pose_, startAngles_);
-  const FrameInput input{frame.points, frame.planes, {}, frame.cloud,
+  const FrameInput input{frame.points,
+                         frame.planes,
+                         {},
+                         frame.cloud,
                          settings_.forearmHoldForce > 0.0f ? &hold : nullptr};
   // Every simulation's first substep maps the points at the same poses: once, shared.
   simulator_.mapFrameStart(rig_, input);
@@ -140,14 +147,8 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     Lane& lane = *lanes_[static_cast<std::size_t>(index)];
     lane.rig.world().restoreState(start_);
     lane.simulator.beginFrame(&simulator_);
-    StrategyContext context{lane.rig,
-                            lane.simulator,
-                            input,
-                            settings_.substeps,
-                            frame.time,
-                            settings_.flipPeriodS,
-                            frame.detection,
-                            &startAngles_};
+    StrategyContext context{lane.rig,   lane.simulator,        input,           settings_.substeps,
+                            frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};
     Candidate& candidate = lane.candidate;
     candidate.kind = lane.strategy->kind();
     candidate.error = 0.0f;

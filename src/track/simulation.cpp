@@ -35,13 +35,15 @@ void Simulator::beginFrame(const Simulator* shared) {
   frameStartPoses_.clear();
   frameStartPoints_ = nullptr;
   shared_ = shared;
+  pass_ = 0;
 }
 
 void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
   beginFrame();
   pose(rig, bodies_);
-  mapPoints(rig, input);
+  mapPoints(rig, input, 0);  // every simulation's first substep uses subset 0
   frameStart_ = attachments_;
+  frameStartSubset_ = 0;
   frameStartPoses_ = poses_;
   frameStartPoints_ = input.points.data();
 }
@@ -64,10 +66,12 @@ Simulator::Attachment Simulator::map(const HandRig& rig, const Vec3& p, BodyMask
   return a;
 }
 
-void Simulator::mapPoints(const HandRig& rig, const FrameInput& input) {
+void Simulator::mapPoints(const HandRig& rig, const FrameInput& input, int subset) {
+  // Points outside the subset keep their last attachment and hint (unused this substep).
   hints_.resize(input.points.size(), -1);
   attachments_.resize(input.points.size());
-  for (std::size_t i = 0; i < input.points.size(); ++i)
+  const auto stride = static_cast<std::size_t>(settings_.pointSubsets);
+  for (auto i = static_cast<std::size_t>(subset); i < input.points.size(); i += stride)
     attachments_[i] = map(rig, input.points[i], kAllBodies, false, &hints_[i]);
 }
 
@@ -76,7 +80,12 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
   auto& rows = world.rows();
   rows.clear();
   pose(rig, bodies_);
-  const std::size_t total = input.points.size() + input.labelled.size();
+  const int subset = pass_++ % settings_.pointSubsets;
+  const auto stride = static_cast<std::size_t>(settings_.pointSubsets);
+  const auto first = static_cast<std::size_t>(subset);
+  const std::size_t used =
+      input.points.size() > first ? (input.points.size() - first - 1) / stride + 1 : 0;
+  const std::size_t total = used + input.labelled.size();
   if (total == 0) return;
   const float cap = settings_.pullForce * settings_.stepDt / static_cast<float>(total);
 
@@ -95,20 +104,22 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
   // the simulator this one shares it with.
   const Simulator& start = shared_ != nullptr ? *shared_ : *this;
   const bool sameAsFrameStart =
-      !start.frameStart_.empty() && start.frameStartPoints_ == input.points.data() &&
+      !start.frameStart_.empty() && start.frameStartSubset_ == subset &&
+      start.frameStartPoints_ == input.points.data() &&
       start.frameStart_.size() == input.points.size() &&
       std::equal(poses_.begin(), poses_.end(), start.frameStartPoses_.begin(),
                  start.frameStartPoses_.end(), samePose);
   if (sameAsFrameStart) {
-    for (std::size_t i = 0; i < input.points.size(); ++i)
+    for (std::size_t i = first; i < input.points.size(); i += stride)
       attach(start.frameStart_[i], input.points[i], cap);
   } else {
     const bool keep = shared_ == nullptr && frameStart_.empty() && frameStartPoints_ == nullptr;
-    mapPoints(rig, input);
-    for (std::size_t i = 0; i < input.points.size(); ++i)
+    mapPoints(rig, input, subset);
+    for (std::size_t i = first; i < input.points.size(); i += stride)
       attach(attachments_[i], input.points[i], cap);
     if (keep) {
       frameStart_ = attachments_;
+      frameStartSubset_ = subset;
       frameStartPoses_ = poses_;
       frameStartPoints_ = input.points.data();
     }

@@ -25,6 +25,10 @@ struct SimulationSettings {
   float boundaryMargin = 0.02f;  // planes farther than this from a body add no row (m)
   // Points farther than this from every body make no row: they belong to something else.
   float maxAttachDistance = 0.06f;
+  // Each substep maps and pulls on one of this many interleaved subsets of the sample
+  // points (point i is in subset i mod pointSubsets), in turn, so a run of substeps still
+  // sees every point; the pull is split over the subset (the total stays pullForce).
+  int pointSubsets = 2;
   // Fingertips over empty space are pushed towards the nearest segmented pixel
   // (track/silhouette.h) with at most this force (N); 0 = off.
   float silhouetteForce = 100.0f;
@@ -86,7 +90,8 @@ class Simulator {
   void addRows(HandRig& rig, const FrameInput& input);
   Attachment map(const HandRig& rig, const Vec3& p, BodyMask mask, bool anyDistance,
                  int* hint) const;
-  void mapPoints(const HandRig& rig, const FrameInput& input);  // into attachments_
+  // Maps subset `subset` of the points (see pointSubsets) into attachments_.
+  void mapPoints(const HandRig& rig, const FrameInput& input, int subset);
 
   SimulationSettings settings_;
   PosedBodies bodies_;
@@ -95,9 +100,11 @@ class Simulator {
   std::vector<int> hints_;  // (points) body each point attached to last pass
   std::vector<Attachment> attachments_;
   std::vector<Attachment> frameStart_;  // the frame's first mapping (see beginFrame)
+  int frameStartSubset_ = 0;            // the subset frameStart_ holds
   std::vector<Pose> frameStartPoses_;
   const Vec3* frameStartPoints_ = nullptr;
   const Simulator* shared_ = nullptr;  // whose frame-start mapping to use (see beginFrame)
+  int pass_ = 0;                       // substeps since beginFrame: picks the point subset
 };
 
 }  // namespace dynahand::track

@@ -66,6 +66,8 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
   if (settings.threads < 1 || settings.threads > 64) return Error{"threads must be 1..64"};
   if (settings.substeps < 1 || settings.iterations < 1)
     return Error{"substeps and iterations must be >= 1"};
+  if (settings.pointSubsets < 1 || settings.pointSubsets > 16)
+    return Error{"pointSubsets must be 1..16"};
   auto impl = std::make_unique<Impl>(rightHand, intrinsics, settings);
   auto right = HandTracker::create(impl->right, model::Side::Right, settings, impl->pool.get());
   if (!right) return right.error();

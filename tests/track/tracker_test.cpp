@@ -127,6 +127,9 @@ TEST(Tracker, RejectsBadSettings) {
   TrackerSettings noThreads;
   noThreads.threads = 0;
   EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, noThreads).ok());
+  TrackerSettings noSubsets;
+  noSubsets.pointSubsets = 0;  // every step would pull on no point
+  EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, noSubsets).ok());
 }
 
 }  // namespace

@@ -48,6 +48,9 @@ class ConvexShape {
   int closestFace(const Vec3& p) const;
   // The three queries at once: returns the signed distance, writes the point and face.
   float query(const Vec3& p, Vec3* closest, int* face) const;
+  // query() for a caller that already has p's largest face-plane distance and its face
+  // (lowest index on ties), e.g. from a vectorised scan of the planes: skips that scan.
+  float queryFromPlane(const Vec3& p, float maxDist, int maxFace, Vec3* closest, int* face) const;
   // A hull vertex maximising direction·v (lowest index on ties). direction need not be unit.
   Vec3 support(const Vec3& direction) const;
   // Ray origin + t·dir (dir unit or not, t in units of |dir|): the smallest t in [0, maxT] at

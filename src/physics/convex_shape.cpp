@@ -252,6 +252,11 @@ float ConvexShape::query(const Vec3& p, Vec3* closest, int* face) const {
       maxFace = static_cast<int>(f);
     }
   }
+  return queryFromPlane(p, maxDist, maxFace, closest, face);
+}
+
+float ConvexShape::queryFromPlane(const Vec3& p, float maxDist, int maxFace, Vec3* closest,
+                                  int* face) const {
   if (maxDist <= 0.0f) {
     if (closest) *closest = p - maxDist * faces_[static_cast<std::size_t>(maxFace)].normal;
     if (face) *face = maxFace;

@@ -174,11 +174,13 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {
     if (bounds[bi] > best.distance) return;
     const Vec3 local = poses_[bi].inverseTransform(p);
     int planeFace = 0;
-    // Outside, the exact distance is at least the largest plane distance.
-    if (maxPlaneDistance(planes_[bi], local, &planeFace, best.distance) > best.distance) return;
+    // Outside, the exact distance is at least the largest plane distance. Not above the
+    // best, the scan ran over every plane: its maximum is the one query() would find.
+    const float planeDist = maxPlaneDistance(planes_[bi], local, &planeFace, best.distance);
+    if (planeDist > best.distance) return;
     Vec3 closest;
     int face = -1;
-    const float sd = shapes_[bi]->query(local, &closest, &face);
+    const float sd = shapes_[bi]->queryFromPlane(local, planeDist, planeFace, &closest, &face);
     const float d = std::abs(sd);
     if (d < best.distance || (d == best.distance && i < best.body)) {
       best = {i, face, d, sd, closest};

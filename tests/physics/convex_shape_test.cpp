@@ -181,6 +181,37 @@ TEST(ConvexShape, SignedDistanceMatchesBruteForceOnRandomHull) {
   }
 }
 
+TEST(ConvexShape, QueryFromPlaneMatchesQueryInsideAndOutside) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 40; ++i) pts.push_back(Vec3(u(rng), u(rng), u(rng)).normalized() * 0.03f);
+  auto shape = ConvexShape::fromPoints(pts);
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  int inside = 0;
+  for (int i = 0; i < 500; ++i) {
+    const Vec3 p(0.06f * u(rng), 0.06f * u(rng), 0.06f * u(rng));
+    int maxFace = 0;
+    float maxDist = -std::numeric_limits<float>::infinity();
+    for (std::size_t f = 0; f < shape->faces().size(); ++f) {
+      const float d = shape->faces()[f].normal.dot(p) - shape->faces()[f].offset;
+      if (d > maxDist) {
+        maxDist = d;
+        maxFace = static_cast<int>(f);
+      }
+    }
+    inside += maxDist <= 0.0f;
+    Vec3 expectedPoint, point;
+    int expectedFace = -1, face = -1;
+    const float expected = shape->query(p, &expectedPoint, &expectedFace);
+    EXPECT_EQ(shape->queryFromPlane(p, maxDist, maxFace, &point, &face), expected);
+    EXPECT_EQ(face, expectedFace);
+    EXPECT_EQ(point, expectedPoint);
+  }
+  EXPECT_GT(inside, 10);  // both branches ran
+  EXPECT_LT(inside, 480);
+}
+
 TEST(ConvexShape, SupportIsExtremeVertex) {
   const ConvexShape shape = ConvexShape::box(Vec3(1, 2, 3));
   EXPECT_LT((shape.support(Vec3(1, 1, 1)) - Vec3(1, 2, 3)).norm(), 1e-6f);

@@ -367,8 +367,14 @@ void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, f
   if (centreDist - c.boundingRadius > margin) return;  // sphere entirely on the allowed side
   // Every hull vertex within margin of the plane gets a push-only row: a rotating body brings
   // other corners to the plane within the step, not just the current extreme one.
+  // A first cut in the body frame (the normal turned once, not every vertex moved); the
+  // vertices near the margin are then measured as before, so the rows do not change.
   const Pose p = pose(b);
+  const Vec3 localNormal = p.q.conjugate() * normal;
+  const float originDist = normal.dot(p.p) - offset;
+  constexpr float kRoundingSlack = 1e-4f;  // m, far above float rounding at hand scale
   for (const Vec3& v : shapes_[static_cast<std::size_t>(c.shape)].vertices()) {
+    if (localNormal.dot(v) + originDist > margin + kRoundingSlack) continue;
     const Vec3 world = p.transform(v);
     const float dist = normal.dot(world) - offset;
     if (dist > margin) continue;

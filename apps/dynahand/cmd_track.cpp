@@ -86,10 +86,10 @@ int runTrack(const TrackOptions& o) {
   }
   const SequenceInfo& info = in.info;
 
-  std::optional<model::ArticulatedModel> hand = handModel(o.hand);
   const bool autoSize = o.handSize == "auto";
   if (autoSize && !o.hand.modelFile.empty())
     throw UsageError("--hand-size auto sizes the built-in hand; it does not go with --model");
+  std::optional<model::ArticulatedModel> hand = handModel(o.hand);
 
   track::TrackerSettings settings;
   settings.hands = o.hands;

@@ -29,6 +29,41 @@ float frameScore(const HandResult& hand) {
   return near + onHand > 0.0f ? 2.0f * near * onHand / (near + onHand) : 0.0f;
 }
 
+// Whether the hand's fingers are out straight: at least three of index..pinky reach 90 % of
+// their length from MCP to tip. Only then does the data show how long they are: a too-long
+// model finger curls into a fist as well as the right one (it even scores a little better,
+// the rendered fist being bulkier than the model's), which drew the length estimate up.
+bool fingersOpen(const HandResult& hand) {
+  if (!hand.tracked) return false;
+  constexpr float kStraight = 0.9f;
+  int straight = 0;
+  for (std::size_t mcp : {5u, 9u, 13u, 17u}) {
+    const auto& k = hand.keypoints21;
+    const float along = (k[mcp + 1] - k[mcp]).norm() + (k[mcp + 2] - k[mcp + 1]).norm() +
+                        (k[mcp + 3] - k[mcp + 2]).norm();
+    if ((k[mcp + 3] - k[mcp]).norm() >= kStraight * along) ++straight;
+  }
+  return straight >= 3;
+}
+
+// One candidate's frames: score and whether its first hand had its fingers open.
+struct CandidateFrames {
+  std::vector<float> scores;
+  std::vector<char> open;
+};
+
+// Mean score over the frames `use` marks (all when empty); frames while settling left out.
+float meanScore(const CandidateFrames& c, int settleFrames, const std::vector<char>& use = {}) {
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t f = static_cast<std::size_t>(settleFrames); f < c.scores.size(); ++f) {
+    if (!use.empty() && use[f] == 0) continue;
+    sum += static_cast<double>(c.scores[f]);
+    ++count;
+  }
+  return count > 0 ? static_cast<float>(sum / count) : 0.0f;
+}
+
 class CandidateScorer {
  public:
   CandidateScorer(std::span<const DepthFrame> frames, const Intrinsics& intrinsics,
@@ -41,34 +76,40 @@ class CandidateScorer {
     options_.tracker.keepCandidates = false;
   }
 
-  // The scores of the given sizes, tracked in parallel.
-  std::vector<float> score(const std::vector<model::HandDimensions>& sizes) {
-    std::vector<float> scores(sizes.size(), 0.0f);
+  // The given sizes, tracked in parallel.
+  std::vector<CandidateFrames> track(const std::vector<model::HandDimensions>& sizes) {
+    std::vector<CandidateFrames> tracked(sizes.size());
     pool_.run(static_cast<int>(sizes.size()), [&](int i) {
-      scores[static_cast<std::size_t>(i)] = scoreOne(sizes[static_cast<std::size_t>(i)]);
+      tracked[static_cast<std::size_t>(i)] = trackOne(sizes[static_cast<std::size_t>(i)]);
     });
     count_ += static_cast<int>(sizes.size());
+    return tracked;
+  }
+  // Their mean scores over all frames.
+  std::vector<float> score(const std::vector<model::HandDimensions>& sizes) {
+    std::vector<float> scores;
+    for (const CandidateFrames& c : track(sizes)) scores.push_back(meanScore(c, settleFrames()));
     return scores;
   }
   int count() const { return count_; }
+  int settleFrames() const { return options_.settleFrames; }
 
  private:
-  float scoreOne(const model::HandDimensions& size) const {
+  CandidateFrames trackOne(const model::HandDimensions& size) const {
+    CandidateFrames c;
+    c.scores.assign(frames_.size(), 0.0f);
+    c.open.assign(frames_.size(), 0);
     auto tracker = Tracker::create(model::makeDefaultHand(size), intrinsics_, options_.tracker);
-    if (!tracker) return 0.0f;
-    if (start_ && !(*tracker)->initializeFromKeypoints(*start_)) return 0.0f;
-    double sum = 0.0;
-    int scored = 0;
+    if (!tracker) return c;
+    if (start_ && !(*tracker)->initializeFromKeypoints(*start_)) return c;
     for (std::size_t f = 0; f < frames_.size(); ++f) {
       const TrackResult& r = (*tracker)->track(frames_[f]);
-      if (static_cast<int>(f) < options_.settleFrames) continue;
-      float frame = 0.0f;
-      for (const HandResult& h : r.hands) frame += frameScore(h);
-      sum += static_cast<double>(frame) /
-             static_cast<double>(std::max<std::size_t>(r.hands.size(), 1));
-      ++scored;
+      float sum = 0.0f;
+      for (const HandResult& h : r.hands) sum += frameScore(h);
+      c.scores[f] = r.hands.empty() ? 0.0f : sum / static_cast<float>(r.hands.size());
+      c.open[f] = !r.hands.empty() && fingersOpen(r.hands.front()) ? 1 : 0;
     }
-    return scored > 0 ? static_cast<float>(sum / scored) : 0.0f;
+    return c;
   }
 
   std::span<const DepthFrame> frames_;
@@ -125,12 +166,29 @@ SearchResult searchFactor(CandidateScorer& scorer, const SizeAt& sizeAt) {
   return r;
 }
 
-// Steps 2 and 3: the peak of sizeAt(1 - step), sizeAt(1), sizeAt(1 + step).
+// Steps 2 and 3: the peak of sizeAt(1 - step), sizeAt(1), sizeAt(1 + step). openOnly: scored
+// over the frames where the middle candidate's fingers are open (if at least kMinOpenFrames).
+constexpr int kMinOpenFrames = 3;
 template <typename SizeAt>
-SearchResult refineFactor(CandidateScorer& scorer, float step, const SizeAt& sizeAt) {
-  const std::vector<float> s =
-      scorer.score({sizeAt(1.0f - step), sizeAt(1.0f), sizeAt(1.0f + step)});
-  return {parabolaPeak(1.0f, step, s[0], s[1], s[2]), *std::max_element(s.begin(), s.end())};
+SearchResult refineFactor(CandidateScorer& scorer, float step, bool openOnly,
+                          const SizeAt& sizeAt) {
+  const std::vector<CandidateFrames> c =
+      scorer.track({sizeAt(1.0f - step), sizeAt(1.0f), sizeAt(1.0f + step)});
+  std::vector<char> use;
+  if (openOnly) {
+    use = c[1].open;
+    const int open = static_cast<int>(
+        std::count(use.begin() + std::min<std::ptrdiff_t>(scorer.settleFrames(),
+                                                          static_cast<std::ptrdiff_t>(use.size())),
+                   use.end(), 1));
+    if (open < kMinOpenFrames) use.clear();
+  }
+  std::array<float, 3> s{}, all{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    s[i] = meanScore(c[i], scorer.settleFrames(), use);
+    all[i] = meanScore(c[i], scorer.settleFrames());
+  }
+  return {parabolaPeak(1.0f, step, s[0], s[1], s[2]), *std::max_element(all.begin(), all.end())};
 }
 
 }  // namespace
@@ -170,11 +228,11 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
     const float length = kDefaultLength * scale.factor;
     const float width = kDefaultWidth * scale.factor;
     // 2. Width alone at that length.
-    const SearchResult w = refineFactor(scorer, kWidthStep, [&](float f) {
+    const SearchResult w = refineFactor(scorer, kWidthStep, false, [&](float f) {
       return model::HandDimensions{length, width * f};
     });
-    // 3. Length alone at that width.
-    const SearchResult l = refineFactor(scorer, kLengthStep, [&](float f) {
+    // 3. Length alone at that width, judged where the fingers are open.
+    const SearchResult l = refineFactor(scorer, kLengthStep, true, [&](float f) {
       return model::HandDimensions{length * f, width * w.factor};
     });
     e.dimensions = {length * l.factor, width * w.factor};

@@ -301,7 +301,7 @@ const CommandRegistration kTrackCommand{Command{
           ->check(CLI::IsMember({"given", "auto"}));
       sub.add_option("--hand-size-frames", o->handSizeFrames,
                      "frames --hand-size auto estimates from (default 30, 1 s at 30 fps)")
-          ->check(CLI::Range(5, 600));
+          ->check(CLI::Range(10, 600));
       sub.add_option("--init", o->init,
                      "gt (ground truth of the first frame), auto, or a pose JSONL file");
       sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));

@@ -11,9 +11,12 @@
 //   1. uniform scale of the default proportions, 0.80-1.20 in steps of 0.10, then the two
 //      half steps beside the best, and the peak of a parabola through the best three;
 //   2. width alone at that length (-7 %, 0, +7 %), parabola peak;
-//   3. length alone at that width (-8 %, 0, +8 %), parabola peak.
+//   3. length alone at that width (-8 %, 0, +8 %), parabola peak, scored only over the frames
+//      where the fingers are out straight: a too-long finger curls into a fist as well as
+//      the right one.
 // 13 candidate trackers; they run in parallel on `threads`. A length or width the caller
 // gives is kept: then step 1 scales the other alone and steps 2-3 are left out (7 trackers).
+// Measured figures: docs/tracker.md, "Hand size".
 #pragma once
 
 #include <optional>
@@ -27,9 +30,10 @@ namespace dynahand::track {
 
 struct HandSizeOptions {
   TrackerSettings tracker;  // settings of the candidate trackers (candidates are not kept)
-  // Frames at the start each candidate leaves out of its score: auto-acquisition (no start
-  // keypoints) may take a few frames.
-  int settleFrames = 3;
+  // Frames at the start each candidate leaves out of its score when it acquires the hand by
+  // itself (no start keypoints): acquisition may take a few frames, and a candidate that is
+  // slow to acquire is not a worse size. With start keypoints every frame counts.
+  int acquisitionFrames = 6;
   int threads = 1;  // candidate trackers run in parallel; the result does not depend on it
   std::optional<float> length;  // m: a known length, kept (only the width is estimated)
   std::optional<float> width;   // m: a known width, kept (only the length is estimated)
@@ -45,10 +49,10 @@ struct HandSizeEstimate {
   float fitScore = 0.0f;
 };
 
-// Estimates the hand size from `frames` (the start of a sequence, e.g. 30 frames; at least
-// settleFrames + 1). start: the first frame's 21 keypoints (each candidate is fitted to them
-// under its joint limits), or none to let each candidate acquire the hand by itself. Errors
-// for bad intrinsics or too few frames.
+// Estimates the hand size from `frames` (the start of a sequence, e.g. 30 frames; without
+// start keypoints more than acquisitionFrames). start: the first frame's 21 keypoints (each
+// candidate is fitted to them under its joint limits), or none to let each candidate acquire the
+// hand by itself. Errors for bad intrinsics or too few frames.
 Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
                                           const Intrinsics& intrinsics,
                                           const std::optional<Keypoints21>& start,

@@ -72,7 +72,8 @@ class CandidateScorer {
         intrinsics_(intrinsics),
         start_(start),
         options_(options),
-        pool_(options.threads) {
+        pool_(options.threads),
+        settleFrames_(start ? 0 : options.acquisitionFrames) {
     options_.tracker.keepCandidates = false;
   }
 
@@ -92,7 +93,8 @@ class CandidateScorer {
     return scores;
   }
   int count() const { return count_; }
-  int settleFrames() const { return options_.settleFrames; }
+  // Frames left out of the scores at the start.
+  int settleFrames() const { return settleFrames_; }
 
  private:
   CandidateFrames trackOne(const model::HandDimensions& size) const {
@@ -117,6 +119,7 @@ class CandidateScorer {
   std::optional<Keypoints21> start_;
   HandSizeOptions options_;
   WorkerPool pool_;
+  int settleFrames_ = 0;
   int count_ = 0;
 };
 
@@ -199,9 +202,11 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
                                           const HandSizeOptions& options) {
   if (const std::string problem = intrinsics.problem(); !problem.empty())
     return Error{"hand size estimate: intrinsics: " + problem};
-  if (static_cast<int>(frames.size()) <= options.settleFrames)
+  const int leftOut = start ? 0 : options.acquisitionFrames;
+  if (static_cast<int>(frames.size()) <= leftOut || frames.empty())
     return Error{"hand size estimate: " + std::to_string(frames.size()) +
-                 " frames; needs more than " + std::to_string(options.settleFrames)};
+                 " frames; needs more than " + std::to_string(leftOut) +
+                 (start ? "" : " (the frames a candidate may take to acquire the hand)")};
   if (options.length && options.width)
     return Error{"hand size estimate: length and width both given, nothing to estimate"};
   CandidateScorer scorer(frames, intrinsics, start, options);

@@ -72,10 +72,12 @@ TEST(HandSize, KeepsAGivenLength) {
 
 TEST(HandSize, RefusesTooFewFramesAndNothingToEstimate) {
   const Clip clip = makeClip({});
+  // Without start keypoints the first acquisitionFrames (6) frames are not scored.
   const std::span<const DepthFrame> three(clip.frames.data(), 3);
-  auto few = estimateHandSize(three, clip.intrinsics, clip.start);
+  auto few = estimateHandSize(three, clip.intrinsics, std::nullopt);
   ASSERT_FALSE(few);
   EXPECT_NE(few.message().find("3 frames"), std::string::npos) << few.message();
+  EXPECT_FALSE(estimateHandSize({}, clip.intrinsics, clip.start));
   HandSizeOptions o;
   o.length = 0.19f;
   o.width = 0.085f;

@@ -15,7 +15,8 @@
 //      where the fingers are out straight: a too-long finger curls into a fist as well as
 //      the right one.
 // 13 candidate trackers; they run in parallel on `threads`. A length or width the caller
-// gives is kept: then step 1 scales the other alone and steps 2-3 are left out (7 trackers).
+// gives is kept: then step 1 scales the other alone and steps 2-3 are left out (7 trackers;
+// a length searched so scores every frame, fists included).
 // Measured figures: docs/tracker.md, "Hand size".
 #pragma once
 

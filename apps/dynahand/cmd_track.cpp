@@ -307,7 +307,8 @@ const CommandRegistration kTrackCommand{Command{
       sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));
       sub.add_option(
              "--threads", o->threads,
-             "threads the simulations of a frame run on (results are identical for any count)")
+             "threads the simulations of a frame (and --hand-size auto's candidate models) run on "
+             "(results are identical for any count)")
           ->check(CLI::Range(1, 64));
       sub.add_option("--start", o->start, "first frame")->check(CLI::NonNegativeNumber);
       sub.add_option("--frames", o->frames, "number of frames (default: all)")

@@ -161,10 +161,15 @@ int runRender(const RenderOptions& o) {
   auto reader = SequenceReader::open(o.input);
   if (!reader) throw UsageError(reader.message());
   const SequenceInfo& info = reader->info();
-  const model::ArticulatedModel right = handModel(o.hand);
-  const model::ArticulatedModel left = model::mirrorModel(right);
+  model::ArticulatedModel right = handModel(o.hand);
   auto frames = io::readTrackJsonl(o.poses, right);
   if (!frames) throw UsageError(frames.message());
+  // The built-in hand at the size the poses were tracked with (given or estimated, written
+  // by track), unless a model or a size is given here.
+  const auto& trackedSize = frames->front().handSize;
+  if (trackedSize && o.hand.modelFile.empty() && !o.hand.lengthGiven() && !o.hand.widthGiven())
+    right = model::makeDefaultHand(trackedSize->dimensions);
+  const model::ArticulatedModel left = model::mirrorModel(right);
 
   std::vector<const io::TrackedFrame*> chosen;
   for (std::size_t i = 0; i < frames->size(); i += static_cast<std::size_t>(o.every)) {
@@ -247,6 +252,8 @@ const CommandRegistration kRenderCommand{Command{
       sub.add_flag("!--no-candidates", o->candidates, "leave out the losing simulations");
       sub.footer(
           "The losing simulations are drawn when the poses were tracked with --candidates.\n"
+          "The hand is the built-in one at the size track recorded in the poses (given or\n"
+          "--hand-size auto) unless --model, --hand-length or --hand-width says otherwise.\n"
           "Examples:\n"
           "  dynahand track clip/ --candidates --out poses.jsonl\n"
           "  dynahand render poses.jsonl clip/ --out frames/\n"

@@ -1,5 +1,6 @@
 // dynahand track: tracks a recording and writes poses (JSON lines / CSV / BVH).
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -8,6 +9,7 @@
 
 #include "dynahand/camera.h"
 #include "dynahand/command.h"
+#include "dynahand/hand_size.h"
 #include "dynahand/metrics.h"
 #include "dynahand/model_pose.h"
 #include "dynahand/progress.h"
@@ -21,6 +23,8 @@ namespace {
 struct TrackOptions {
   std::string input, out, csv, bvh, init = "auto";
   HandModelOptions hand;
+  std::string handSize = "given";  // or "auto": estimateHandSize over the first frames
+  int handSizeFrames = 30;
   int hands = 1, threads = 1, start = 0, frames = -1;
   bool perFrame = false, candidates = false;
   std::vector<std::string> disable;
@@ -82,6 +86,9 @@ int runTrack(const TrackOptions& o) {
   }
   const SequenceInfo& info = in.info;
 
+  const bool autoSize = o.handSize == "auto";
+  if (autoSize && !o.hand.modelFile.empty())
+    throw UsageError("--hand-size auto sizes the built-in hand; it does not go with --model");
   std::optional<model::ArticulatedModel> hand = handModel(o.hand);
 
   track::TrackerSettings settings;
@@ -98,28 +105,82 @@ int runTrack(const TrackOptions& o) {
     }
     if (!found) throw UsageError("--disable: unknown simulation '" + name + "'");
   }
-  auto tracker = track::Tracker::create(*hand, info.intrinsics, settings);
-  if (!tracker) throw std::runtime_error(tracker.message());
 
   const int first = std::clamp(o.start, 0, info.frameCount);
   const int last = o.frames < 0 ? info.frameCount : std::min(info.frameCount, first + o.frames);
+  // The start: ground truth keypoints, or a pose file's first pose (its keypoints too, for a
+  // model of another size), or none (automatic acquisition).
+  std::optional<Keypoints21> startKeypoints;
+  std::optional<model::ModelPose> startPose;
   if (o.init == "gt") {
-    const auto gt = in.reader->groundTruth(first);
-    if (!gt)
+    startKeypoints = in.reader->groundTruth(first);
+    if (!startKeypoints)
       throw UsageError("--init gt: " + o.input + " has no ground truth for frame " +
                        std::to_string(first));
-    const Status s = (*tracker)->initializeFromKeypoints(*gt);
-    if (!s) throw std::runtime_error("--init gt: " + s.message());
   } else if (o.init != "auto") {
     auto poses = model::loadPoseSequence(o.init);
     if (!poses) throw UsageError("--init: " + poses.message());
     if (poses->frames.empty()) throw UsageError("--init: " + o.init + " holds no pose");
     const Status s = model::checkPoseSequence(*poses, *hand);
     if (!s) throw UsageError("--init: " + s.message());
-    (*tracker)->initialize(poses->frames.front());
+    startPose = poses->frames.front();
+    startKeypoints = model::keypoints21(*hand, *startPose);
+  }
+
+  // Frames read ahead (for the hand-size estimate), tracked before any other.
+  std::vector<DepthFrame> head;
+  auto readFrame = [&](int f, DepthFrame& out) {
+    if (in.camera) {
+      const Status s = in.camera->grab(out);
+      if (!s) throw std::runtime_error(o.input + ": " + s.message());
+    } else {
+      auto recorded = in.reader->frame(f);
+      if (!recorded) throw std::runtime_error(recorded.message());
+      out = std::move(*recorded);
+    }
+  };
+  std::optional<io::HandSizeRecord> handSize;
+  if (o.hand.modelFile.empty()) handSize = io::HandSizeRecord{{o.hand.length, o.hand.width}};
+  if (autoSize && o.hand.lengthGiven() && o.hand.widthGiven()) {
+    std::printf("--hand-size auto: --hand-length and --hand-width given, nothing to estimate\n");
+  } else if (autoSize) {
+    const int count = std::min(o.handSizeFrames, last - first);
+    head.resize(static_cast<std::size_t>(std::max(count, 0)));
+    for (int i = 0; i < count; ++i) readFrame(first + i, head[static_cast<std::size_t>(i)]);
+    track::HandSizeOptions hs;
+    hs.tracker = settings;
+    hs.threads = o.threads;
+    if (o.hand.lengthGiven()) hs.length = o.hand.length;
+    if (o.hand.widthGiven()) hs.width = o.hand.width;
+    std::printf("hand size: estimating from frames %d-%d...\n", first, first + count - 1);
+    std::fflush(stdout);
+    const auto started = std::chrono::steady_clock::now();
+    auto estimate = track::estimateHandSize(head, info.intrinsics, startKeypoints, hs);
+    if (!estimate) throw std::runtime_error("--hand-size auto: " + estimate.message());
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    handSize =
+        io::HandSizeRecord{estimate->dimensions, true, estimate->framesUsed, estimate->fitScore};
+    std::printf(
+        "hand size estimate: length %.4f m  width %.4f m  (%d frames, %d candidate models, fit "
+        "%.3f, %.1f s)\n",
+        static_cast<double>(estimate->dimensions.length),
+        static_cast<double>(estimate->dimensions.width), estimate->framesUsed, estimate->candidates,
+        static_cast<double>(estimate->fitScore), seconds);
+    hand = model::makeDefaultHand(estimate->dimensions);
+  }
+
+  auto tracker = track::Tracker::create(*hand, info.intrinsics, settings);
+  if (!tracker) throw std::runtime_error(tracker.message());
+  if (startPose && !(handSize && handSize->estimated)) {
+    (*tracker)->initialize(*startPose);
+  } else if (startKeypoints) {  // a pose of another model size starts from its keypoints
+    const Status s = (*tracker)->initializeFromKeypoints(*startKeypoints);
+    if (!s) throw std::runtime_error("--init " + o.init + ": " + s.message());
   }
 
   io::JsonOptions json;
+  json.handSize = handSize;
   json.candidates = o.candidates;
   json.candidatePoses = o.candidates;
   std::unique_ptr<io::TrackWriter> writer, csv;
@@ -145,16 +206,15 @@ int runTrack(const TrackOptions& o) {
   int done = 0;
   model::ModelPose lastPose;
   for (int f = first; f < last && !interrupted(); ++f) {
+    const std::size_t ahead = static_cast<std::size_t>(f - first);
+    DepthFrame recorded;
     const DepthFrame* depth = nullptr;
-    Result<DepthFrame> recorded = Error{""};
-    if (in.camera) {
-      const Status s = in.camera->grab(in.live);
-      if (!s) throw std::runtime_error(o.input + ": " + s.message());
-      depth = &in.live;
+    if (ahead < head.size()) {
+      depth = &head[ahead];
     } else {
-      recorded = in.reader->frame(f);
-      if (!recorded) throw std::runtime_error(recorded.message());
-      depth = &*recorded;
+      DepthFrame& target = in.camera ? in.live : recorded;
+      readFrame(f, target);
+      depth = &target;
     }
     const track::TrackResult& r = (*tracker)->track(*depth);
     times.push_back(r.timeMs);
@@ -191,6 +251,15 @@ int runTrack(const TrackOptions& o) {
     if (!s) throw std::runtime_error(s.message());
   }
 
+  if (handSize) {
+    std::printf("hand size  length %.4f m  width %.4f m  (%s)\n",
+                static_cast<double>(handSize->dimensions.length),
+                static_cast<double>(handSize->dimensions.width),
+                handSize->estimated ? ("estimated from frames " + std::to_string(first) + "-" +
+                                       std::to_string(first + handSize->frames - 1))
+                                          .c_str()
+                                    : "given");
+  }
   std::printf("frames %d  tracked %d (%.1f%%)\n", done, trackedFrames,
               done ? 100.0 * trackedFrames / done : 0.0);
   std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n",
@@ -224,12 +293,22 @@ const CommandRegistration kTrackCommand{Command{
       sub.add_option("--csv", o->csv, "also write the 21 keypoints as CSV");
       sub.add_option("--bvh", o->bvh, "also write a BVH skeleton animation");
       addHandModelOptions(sub, o->hand);
+      sub.add_option("--hand-size", o->handSize,
+                     "given (--hand-length / --hand-width, default 0.19 / 0.085), or auto: "
+                     "estimate the built-in hand's size from the first --hand-size-frames frames "
+                     "(13 candidate models tracked over them; a given --hand-length or "
+                     "--hand-width is kept), then track with it; the size goes into the output")
+          ->check(CLI::IsMember({"given", "auto"}));
+      sub.add_option("--hand-size-frames", o->handSizeFrames,
+                     "frames --hand-size auto estimates from (default 30, 1 s at 30 fps)")
+          ->check(CLI::Range(10, 600));
       sub.add_option("--init", o->init,
                      "gt (ground truth of the first frame), auto, or a pose JSONL file");
       sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));
       sub.add_option(
              "--threads", o->threads,
-             "threads the simulations of a frame run on (results are identical for any count)")
+             "threads the simulations of a frame (and --hand-size auto's candidate models) run on "
+             "(results are identical for any count)")
           ->check(CLI::Range(1, 64));
       sub.add_option("--start", o->start, "first frame")->check(CLI::NonNegativeNumber);
       sub.add_option("--frames", o->frames, "number of frames (default: all)")
@@ -245,6 +324,7 @@ const CommandRegistration kTrackCommand{Command{
           "Examples:\n"
           "  dynahand track clip/ --out poses.jsonl\n"
           "  dynahand track clip/ --init gt --out poses.jsonl --bvh hand.bvh\n"
+          "  dynahand track clip/ --hand-size auto --out poses.jsonl\n"
           "  dynahand track clip/ --out hand.pose\n"
           "  dynahand track camera:0 --out live.jsonl\n"
           "  dynahand track ../shared/data/sr305-hands/20210326-230536 --per-frame --out "

@@ -12,10 +12,12 @@ std::vector<Command>& commandRegistry() {
 void addHandModelOptions(CLI::App& sub, HandModelOptions& o, bool withModelFile) {
   if (withModelFile)
     sub.add_option("--model", o.modelFile, "hand model file (default: the built-in hand)");
-  sub.add_option("--hand-length", o.length, "built-in hand: wrist crease to middle fingertip, m")
-      ->check(CLI::Range(0.10f, 0.30f));
-  sub.add_option("--hand-width", o.width, "built-in hand: palm width at the knuckles, m")
-      ->check(CLI::Range(0.05f, 0.15f));
+  o.lengthOption = sub.add_option("--hand-length", o.length,
+                                  "built-in hand: wrist crease to middle fingertip, m")
+                       ->check(CLI::Range(0.10f, 0.30f));
+  o.widthOption =
+      sub.add_option("--hand-width", o.width, "built-in hand: palm width at the knuckles, m")
+          ->check(CLI::Range(0.05f, 0.15f));
 }
 
 model::ArticulatedModel handModel(const HandModelOptions& o) {

@@ -43,6 +43,12 @@ struct HandModelOptions {
   std::string modelFile;  // empty: the built-in hand at the size below
   float length = 0.19f;   // wrist crease to middle fingertip, m
   float width = 0.085f;   // palm width at the knuckles, m
+  // Set by addHandModelOptions: whether the user gave a size (a given value wins over one
+  // read from a file or estimated).
+  const CLI::Option* lengthOption = nullptr;
+  const CLI::Option* widthOption = nullptr;
+  bool lengthGiven() const { return lengthOption != nullptr && lengthOption->count() > 0; }
+  bool widthGiven() const { return widthOption != nullptr && widthOption->count() > 0; }
 };
 // Adds the options to `sub`; --model only when withModelFile.
 void addHandModelOptions(CLI::App& sub, HandModelOptions& o, bool withModelFile = true);

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,9 +19,18 @@ namespace dynahand::io {
 
 inline constexpr int kTrackFormatVersion = 1;
 
+// The built-in hand's size the poses were tracked with ("hand_size" in every JSON line).
+struct HandSizeRecord {
+  model::HandDimensions dimensions;  // m
+  bool estimated = false;            // by estimateHandSize (hand_size.h); else given
+  int frames = 0;                    // estimated: frames the estimate used
+  float fitScore = 0.0f;             // estimated: HandSizeEstimate::fitScore
+};
+
 struct JsonOptions {
-  bool bodies = true;       // per-body poses
-  bool openxr = true;       // the 26 OpenXR joints
+  std::optional<HandSizeRecord> handSize;  // none: a model file (its size is not a record)
+  bool bodies = true;                      // per-body poses
+  bool openxr = true;                      // the 26 OpenXR joints
   bool candidates = false;  // every simulation's error (and, with candidatePoses, poses)
   bool candidatePoses = false;
 };
@@ -74,6 +84,7 @@ struct TrackedHand {
 struct TrackedFrame {
   int frame = 0;
   double timeMs = 0.0;
+  std::optional<HandSizeRecord> handSize;
   std::vector<TrackedHand> hands;
 };
 

@@ -38,9 +38,24 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
                               const JsonOptions& o) {
   std::string s;
   s.reserve(4096);
-  fmt::format_to(std::back_inserter(s),
-                 "{{\"version\":{},\"frame\":{},\"time_ms\":{:.3f},\"hands\":[",
+  fmt::format_to(std::back_inserter(s), "{{\"version\":{},\"frame\":{},\"time_ms\":{:.3f},",
                  kTrackFormatVersion, r.frame, r.timeMs);
+  if (o.handSize) {
+    const HandSizeRecord& size = *o.handSize;
+    s += "\"hand_size\":{\"length\":";
+    appendNumber(s, size.dimensions.length);
+    s += ",\"width\":";
+    appendNumber(s, size.dimensions.width);
+    if (size.estimated) {
+      fmt::format_to(std::back_inserter(s),
+                     ",\"source\":\"estimated\",\"frames\":{},\"fit\":", size.frames);
+      appendNumber(s, size.fitScore);
+      s += "},";
+    } else {
+      s += ",\"source\":\"given\"},";
+    }
+  }
+  s += "\"hands\":[";
   for (std::size_t h = 0; h < r.hands.size(); ++h) {
     const track::HandResult& hand = r.hands[h];
     if (h > 0) s += ',';

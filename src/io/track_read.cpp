@@ -98,6 +98,15 @@ Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& pa
       TrackedFrame frame;
       frame.frame = j.at("frame").get<int>();
       frame.timeMs = j.value("time_ms", 0.0);
+      if (j.contains("hand_size")) {
+        const json& size = j["hand_size"];
+        HandSizeRecord record;
+        record.dimensions = {readNumber(size.at("length")), readNumber(size.at("width"))};
+        record.estimated = size.value("source", std::string("given")) == "estimated";
+        record.frames = size.value("frames", 0);
+        if (size.contains("fit")) record.fitScore = readNumber(size["fit"]);
+        frame.handSize = record;
+      }
       for (const json& h : j.at("hands")) frame.hands.push_back(readHand(h, model, bodyIndex));
       frames.push_back(std::move(frame));
     } catch (const std::exception& e) {

@@ -57,6 +57,21 @@ TEST(TrackJson, HasTheDocumentedFields) {
   EXPECT_NEAR(h["error"].get<float>(), 0.05f, 1e-6f);
   ASSERT_EQ(h["candidates"].size(), 1u);
   EXPECT_EQ(h["candidates"][0]["simulation"], "normal");
+  EXPECT_FALSE(j.contains("hand_size"));  // only when the writer is told the size
+}
+
+TEST(TrackJson, EstimatedHandSizeHasItsSourceFramesAndFit) {
+  const auto hand = model::makeDefaultHand();
+  JsonOptions o;
+  o.handSize = HandSizeRecord{{0.17f, 0.078f}, true, 30, 0.99f};
+  const auto j = nlohmann::json::parse(trackResultToJson(sampleResult(hand, 0, true), hand, o));
+  ASSERT_TRUE(j.contains("hand_size"));
+  EXPECT_NEAR(j["hand_size"]["length"].get<float>(), 0.17f, 1e-6f);
+  EXPECT_NEAR(j["hand_size"]["width"].get<float>(), 0.078f, 1e-6f);
+  EXPECT_EQ(j["hand_size"]["source"], "estimated");
+  EXPECT_EQ(j["hand_size"]["frames"], 30);
+  EXPECT_NEAR(j["hand_size"]["fit"].get<float>(), 0.99f, 1e-6f);
+  EXPECT_EQ(j["hands"].size(), 1u);
 }
 
 TEST(TrackJson, LostHandHasNullKeypoints) {

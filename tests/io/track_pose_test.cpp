@@ -97,6 +97,38 @@ TEST(TrackJsonRead, BodiesAndCandidatePosesReadBack) {
   EXPECT_TRUE((*frames)[1].hands[0].pose.bodies.empty());
 }
 
+// "hand_size" in every line: the size the poses were tracked with, given or estimated.
+TEST(TrackJsonRead, HandSizeReadsBack) {
+  const auto hand = model::makeDefaultHand({0.17f, 0.078f});
+  const auto dir = test::scratchDir("track_read_hand_size");
+  HandSizeRecord estimated;
+  estimated.dimensions = {0.17f, 0.078f};
+  estimated.estimated = true;
+  estimated.frames = 30;
+  estimated.fitScore = 0.99f;
+  for (const std::optional<HandSizeRecord>& record :
+       {std::optional<HandSizeRecord>(estimated), std::optional<HandSizeRecord>(HandSizeRecord{}),
+        std::optional<HandSizeRecord>()}) {
+    JsonOptions o;
+    o.handSize = record;
+    const auto path = dir / "poses.jsonl";
+    auto writer = TrackWriter::create(path, hand, o);
+    ASSERT_TRUE(writer);
+    ASSERT_TRUE((*writer)->write(resultAt(hand, 0, true)));
+    ASSERT_TRUE((*writer)->close());
+    auto frames = readTrackJsonl(path, hand);
+    ASSERT_TRUE(frames) << frames.message();
+    const auto& read = frames->front().handSize;
+    ASSERT_EQ(read.has_value(), record.has_value());
+    if (!record) continue;
+    EXPECT_NEAR(read->dimensions.length, record->dimensions.length, 1e-6f);
+    EXPECT_NEAR(read->dimensions.width, record->dimensions.width, 1e-6f);
+    EXPECT_EQ(read->estimated, record->estimated);
+    EXPECT_EQ(read->frames, record->frames);
+    EXPECT_NEAR(read->fitScore, record->fitScore, 1e-6f);
+  }
+}
+
 TEST(TrackJsonRead, ErrorsNameTheLine) {
   const auto hand = model::makeDefaultHand();
   const auto path = test::scratchDir("track_read_bad") / "poses.jsonl";

@@ -1,0 +1,89 @@
+// The automatic hand-size estimate (hand_size.h) on short synthetic clips of a small and a
+// large hand, tracked from the first frame's keypoints: the default (medium) model is 15 %
+// off either way, so an estimate that stays near the model's size fails.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "dynahand/hand_size.h"
+#include "dynahand/synth.h"
+
+namespace dynahand::track {
+namespace {
+
+// 10 frames (1/3 s) keep the test short (13 trackers); the search measured 0.3-1.9 % off on
+// these clips (30 frames, three clips: within 2 % but for one length at 6 %, docs/tracker.md).
+// 5 % is the target and well outside the default model's 13-15 % difference.
+constexpr int kFrames = 10;
+constexpr float kTolerance = 0.05f;
+
+struct Clip {
+  std::vector<DepthFrame> frames;
+  Intrinsics intrinsics;
+  Keypoints21 start{};
+};
+
+Clip makeClip(const model::HandDimensions& size) {
+  synth::SynthOptions o;
+  o.clip = "wave";
+  o.profile = "tof";
+  o.frameCount = kFrames;
+  o.hand = size;
+  auto seq = synth::SyntheticSequence::create(o);
+  EXPECT_TRUE(seq) << seq.message();
+  Clip clip;
+  clip.intrinsics = seq->intrinsics();
+  clip.start = seq->frame(0).hands[0].keypoints;
+  for (int f = 0; f < kFrames; ++f) clip.frames.push_back(seq->frame(f).depth);
+  return clip;
+}
+
+void expectNear(float estimated, float truth, const char* what) {
+  EXPECT_NEAR(estimated / truth, 1.0f, kTolerance)
+      << what << " " << estimated << " m, truth " << truth << " m";
+}
+
+TEST(HandSize, EstimatesASmallAndALargeHand) {
+  for (const model::HandDimensions truth :
+       {model::HandDimensions{0.165f, 0.075f}, model::HandDimensions{0.215f, 0.095f}}) {
+    const Clip clip = makeClip(truth);
+    auto e = estimateHandSize(clip.frames, clip.intrinsics, clip.start);
+    ASSERT_TRUE(e) << e.message();
+    expectNear(e->dimensions.length, truth.length, "length");
+    expectNear(e->dimensions.width, truth.width, "width");
+    EXPECT_EQ(e->framesUsed, kFrames);
+    EXPECT_EQ(e->candidates, 13);
+    EXPECT_GT(e->fitScore, 0.95f);
+  }
+}
+
+// A given length is kept; the width alone is searched.
+TEST(HandSize, KeepsAGivenLength) {
+  const model::HandDimensions truth{0.165f, 0.075f};
+  const Clip clip = makeClip(truth);
+  HandSizeOptions o;
+  o.length = truth.length;
+  auto e = estimateHandSize(clip.frames, clip.intrinsics, clip.start, o);
+  ASSERT_TRUE(e) << e.message();
+  EXPECT_EQ(e->dimensions.length, truth.length);
+  expectNear(e->dimensions.width, truth.width, "width");
+  EXPECT_EQ(e->candidates, 7);
+}
+
+TEST(HandSize, RefusesTooFewFramesAndNothingToEstimate) {
+  const Clip clip = makeClip({});
+  // Without start keypoints the first acquisitionFrames (6) frames are not scored.
+  const std::span<const DepthFrame> three(clip.frames.data(), 3);
+  auto few = estimateHandSize(three, clip.intrinsics, std::nullopt);
+  ASSERT_FALSE(few);
+  EXPECT_NE(few.message().find("3 frames"), std::string::npos) << few.message();
+  EXPECT_FALSE(estimateHandSize({}, clip.intrinsics, clip.start));
+  HandSizeOptions o;
+  o.length = 0.19f;
+  o.width = 0.085f;
+  EXPECT_FALSE(estimateHandSize(clip.frames, clip.intrinsics, clip.start, o));
+  EXPECT_FALSE(estimateHandSize(clip.frames, Intrinsics{}, clip.start));
+}
+
+}  // namespace
+}  // namespace dynahand::track

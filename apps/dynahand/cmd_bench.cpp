@@ -122,7 +122,7 @@ const CommandRegistration kBenchCommand{Command{
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<BenchOptions>();
       sub.add_flag("--quick", o->quick, "a few short items (CI): 2 clips, 2 profiles, 8 frames");
-      sub.add_option("--frames", o->frames, "frames per item (default 60; quick 8)")
+      sub.add_option("--frames", o->frames, "frames per item (default 150; quick 8)")
           ->check(CLI::Range(2, 100000));
       sub.add_option("--threads", o->threads,
                      "items run in parallel (each item on one thread: per-frame times stay "

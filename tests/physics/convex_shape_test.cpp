@@ -19,6 +19,16 @@ std::vector<Vec3> boxCorners(const Vec3& h, const Vec3& centre = Vec3::Zero()) {
   return c;
 }
 
+// count random points on a sphere of the given radius about the origin (a random hull's
+// vertices); draws from rng through u, which the caller keeps using.
+std::vector<Vec3> randomSpherePoints(std::mt19937& rng, std::uniform_real_distribution<float>& u,
+                                     int count, float radius) {
+  std::vector<Vec3> points;
+  for (int i = 0; i < count; ++i)
+    points.push_back(Vec3(u(rng), u(rng), u(rng)).normalized() * radius);
+  return points;
+}
+
 // Exact signed distance of an axis-aligned box of half extents h centred at the origin.
 float boxSignedDistance(const Vec3& p, const Vec3& h) {
   const Vec3 q = p.cwiseAbs() - h;
@@ -146,9 +156,7 @@ TEST(ConvexShape, SignedDistanceMatchesBoxClosedFormEverywhere) {
 TEST(ConvexShape, SignedDistanceMatchesBruteForceOnRandomHull) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<Vec3> pts;
-  for (int i = 0; i < 30; ++i) pts.push_back(Vec3(u(rng), u(rng), u(rng)).normalized() * 0.05f);
-  auto shape = ConvexShape::fromPoints(pts);
+  auto shape = ConvexShape::fromPoints(randomSpherePoints(rng, u, 30, 0.05f));
   ASSERT_TRUE(shape.ok()) << shape.message();
   std::vector<Vec3> samples;
   const int n = 40;
@@ -184,9 +192,7 @@ TEST(ConvexShape, SignedDistanceMatchesBruteForceOnRandomHull) {
 TEST(ConvexShape, QueryFromPlaneMatchesQueryInsideAndOutside) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<Vec3> pts;
-  for (int i = 0; i < 40; ++i) pts.push_back(Vec3(u(rng), u(rng), u(rng)).normalized() * 0.03f);
-  auto shape = ConvexShape::fromPoints(pts);
+  auto shape = ConvexShape::fromPoints(randomSpherePoints(rng, u, 40, 0.03f));
   ASSERT_TRUE(shape.ok()) << shape.message();
   int inside = 0;
   for (int i = 0; i < 500; ++i) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
@@ -10,8 +11,61 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define DYNAHAND_PLANE_SCAN_AVX 1
+#endif
 
 namespace dynahand::track {
+
+namespace {
+
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+// The same eight lanes as the SSE path in one 256-bit register (half the loop trips). Only
+// AVX (no FMA): each lane's multiply-add sequence is unchanged, so both paths give identical
+// bits. Face indices ride in a float register (exact far beyond any face count), since
+// 256-bit integer operations need AVX2.
+__attribute__((target("avx"))) float maxPlaneDistanceAvx(const float* nx, const float* ny,
+                                                         const float* nz, const float* o,
+                                                         std::size_t n, const Vec3& q,
+                                                         float stopAbove, int* face) {
+  const __m256 qx = _mm256_set1_ps(q.x()), qy = _mm256_set1_ps(q.y()), qz = _mm256_set1_ps(q.z());
+  const __m256 stop = _mm256_set1_ps(stopAbove);
+  const __m256 eight = _mm256_set1_ps(8.0f);
+  __m256 best = _mm256_set1_ps(-1e30f);
+  __m256 index = _mm256_setzero_ps();
+  __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  for (std::size_t f = 0; f < n; f += 8) {
+    const __m256 d =
+        _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(nx + f), qx),
+                                                  _mm256_mul_ps(_mm256_loadu_ps(ny + f), qy)),
+                                    _mm256_mul_ps(_mm256_loadu_ps(nz + f), qz)),
+                      _mm256_loadu_ps(o + f));
+    const __m256 better = _mm256_cmp_ps(d, best, _CMP_GT_OQ);
+    best = _mm256_max_ps(d, best);  // == better ? d : best (no NaNs here)
+    // A bitwise select: GCC turns blendv with a compare mask into per-lane branches.
+    index = _mm256_or_ps(_mm256_and_ps(better, lane), _mm256_andnot_ps(better, index));
+    lane = _mm256_add_ps(lane, eight);
+    if (_mm256_movemask_ps(_mm256_cmp_ps(d, stop, _CMP_GT_OQ)) != 0) break;
+  }
+  // The lanes' maximum, then the lowest face index among the lanes holding it (as the
+  // scalar reduction does).
+  __m256 m = _mm256_max_ps(best, _mm256_permute2f128_ps(best, best, 1));
+  m = _mm256_max_ps(m, _mm256_permute_ps(m, 0x4E));
+  m = _mm256_max_ps(m, _mm256_permute_ps(m, 0xB1));
+  const __m256 tied = _mm256_cmp_ps(best, m, _CMP_EQ_OQ);
+  __m256 i = _mm256_or_ps(_mm256_and_ps(tied, index), _mm256_andnot_ps(tied, _mm256_set1_ps(1e9f)));
+  i = _mm256_min_ps(i, _mm256_permute2f128_ps(i, i, 1));
+  i = _mm256_min_ps(i, _mm256_permute_ps(i, 0x4E));
+  i = _mm256_min_ps(i, _mm256_permute_ps(i, 0xB1));
+  *face = static_cast<int>(_mm256_cvtss_f32(i));
+  return _mm256_cvtss_f32(m);
+}
+
+std::atomic<bool> wideScan{__builtin_cpu_supports("avx") != 0};
+#endif
+
+}  // namespace
 
 void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
                       std::span<const Pose> poses) {
@@ -51,6 +105,32 @@ void PosedBodies::setPose(int body, const Pose& pose) {
   centroids_[i] = pose.transform(shapes_[i]->centroid());
 }
 
+namespace {
+// The largest of the eight lanes' maxima; ties go to the lower face index.
+float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
+  float result = best[0];
+  int which = index[0];
+  for (int k = 1; k < 8; ++k) {
+    if (best[k] > result || (best[k] == result && index[k] < which)) {
+      result = best[k];
+      which = index[k];
+    }
+  }
+  *face = which;
+  return result;
+}
+}  // namespace
+
+bool PosedBodies::useWidePlaneScan(bool enabled) {
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+  wideScan.store(enabled && __builtin_cpu_supports("avx") != 0);
+  return wideScan.load();
+#else
+  (void)enabled;
+  return false;
+#endif
+}
+
 float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
                                     float stopAbove) {
   // Eight independent lanes (maximum and its face per lane), reduced at the end: the same
@@ -62,6 +142,10 @@ float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* fac
   const float* o = t.offset.data();
   alignas(16) float best[8];
   alignas(16) std::int32_t index[8];
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+  if (wideScan.load(std::memory_order_relaxed))
+    return maxPlaneDistanceAvx(nx, ny, nz, o, n, q, stopAbove, face);
+#endif
 #if defined(__SSE2__)
   const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
   const __m128 stop = _mm_set1_ps(stopAbove);
@@ -113,16 +197,7 @@ float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* fac
     if (above) break;
   }
 #endif
-  float result = best[0];
-  int which = index[0];
-  for (int k = 1; k < 8; ++k) {
-    if (best[k] > result || (best[k] == result && index[k] < which)) {
-      result = best[k];
-      which = index[k];
-    }
-  }
-  *face = which;
-  return result;
+  return reduceLanes(best, index, face);
 }
 
 SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) const {

@@ -215,5 +215,34 @@ TEST(PosedBodies, PlanarQueryIsExactInsideAndALowerBoundOutside) {
   EXPECT_GT(inside, 0);
 }
 
+// The AVX plane scan (where the CPU has it) and the SSE one give the same bits.
+TEST(PosedBodies, WideAndNarrowPlaneScansAgreeBitForBit) {
+  const bool wide = PosedBodies::useWidePlaneScan(true);
+  if (!wide) GTEST_SKIP() << "this CPU has no AVX: only the SSE plane scan exists here";
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    Scene s = randomScene(seed);
+    PosedBodies bodies;
+    bodies.set(s.shapePtrs, s.poses);
+    for (const Vec3& p : s.points) {
+      for (int hint : {-1, 2}) {
+        PosedBodies::useWidePlaneScan(true);
+        const SurfaceHit exactWide = bodies.nearest(p, kAllBodies, hint);
+        const SurfaceHit planarWide = bodies.nearestPlanar(p, kAllBodies, hint);
+        PosedBodies::useWidePlaneScan(false);
+        const SurfaceHit exact = bodies.nearest(p, kAllBodies, hint);
+        const SurfaceHit planar = bodies.nearestPlanar(p, kAllBodies, hint);
+        for (const auto& [a, b] : {std::pair{exactWide, exact}, std::pair{planarWide, planar}}) {
+          EXPECT_EQ(a.body, b.body);
+          EXPECT_EQ(a.face, b.face);
+          EXPECT_EQ(a.distance, b.distance);
+          EXPECT_EQ(a.signedDistance, b.signedDistance);
+          EXPECT_EQ(a.localPoint, b.localPoint);
+        }
+      }
+    }
+  }
+  PosedBodies::useWidePlaneScan(true);
+}
+
 }  // namespace
 }  // namespace dynahand::track

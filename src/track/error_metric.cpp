@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace dynahand::track {
 
@@ -22,11 +23,13 @@ void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
   out.fit.assign(n, 0.0f);
   out.occlusion.assign(n, 0.0f);
   out.pointCount.assign(n, 0);
+  out.pointDistance.assign(points.size(), std::numeric_limits<float>::infinity());
   const bool hinted = nearestHints.size() == points.size();
   for (std::size_t k = 0; k < points.size(); ++k) {
     const Vec3& p = points[k];
     const SurfaceHit hit = bodies.nearest(p, kAllBodies, hinted ? nearestHints[k] : -1);
     if (hit.body < 0) continue;
+    out.pointDistance[k] = hit.distance;
     const auto i = static_cast<std::size_t>(hit.body);
     out.fit[i] = std::max(out.fit[i], hit.distance);
     ++out.pointCount[i];

@@ -18,12 +18,14 @@
 namespace dynahand::track {
 
 struct ErrorBreakdown {
-  std::vector<float> fit;        // (bodies) errFit_i, m
-  std::vector<float> occlusion;  // (bodies) errOcc_i, m
-  std::vector<int> pointCount;   // (bodies) |P_i|
-  float fitTotal = 0.0f;         // m
-  float occlusionTotal = 0.0f;   // m
-  float total = 0.0f;            // m
+  std::vector<float> fit;            // (bodies) errFit_i, m
+  std::vector<float> occlusion;      // (bodies) errOcc_i, m
+  std::vector<int> pointCount;       // (bodies) |P_i|
+  std::vector<float> pointDistance;  // (points) distance to the nearest body's surface, m
+                                     // (infinity when no body exists)
+  float fitTotal = 0.0f;             // m
+  float occlusionTotal = 0.0f;       // m
+  float total = 0.0f;                // m
 };
 
 // isFree(p): whether the camera saw the space at p (camera frame) to be empty, e.g.

@@ -1,5 +1,6 @@
 #include "track/fit_quality.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dynahand::track {
@@ -29,18 +30,13 @@ bool onMask(const CloudFrame& cloud, float uf, float vf, int extra = 0) {
 
 }  // namespace
 
-FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const Vec3> points,
-                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips,
-                             std::span<const int> nearestHints) {
+FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const float> pointDistances,
+                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips) {
   FitQuality q;
-  if (!points.empty()) {
-    int near = 0;
-    const bool hinted = nearestHints.size() == points.size();
-    for (std::size_t k = 0; k < points.size(); ++k) {
-      const SurfaceHit hit = bodies.nearest(points[k], kAllBodies, hinted ? nearestHints[k] : -1);
-      if (hit.body >= 0 && hit.distance <= kNearSurfaceM) ++near;
-    }
-    q.dataNearModel = static_cast<float>(near) / static_cast<float>(points.size());
+  if (!pointDistances.empty()) {
+    const auto near = std::count_if(pointDistances.begin(), pointDistances.end(),
+                                    [](float d) { return d <= kNearSurfaceM; });
+    q.dataNearModel = static_cast<float>(near) / static_cast<float>(pointDistances.size());
   }
   // Camera-facing faces, by area, whose centre projects onto a segmented pixel.
   double facing = 0.0, onHand = 0.0;

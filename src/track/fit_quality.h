@@ -12,12 +12,11 @@
 
 namespace dynahand::track {
 
-// bodies: the fitted model; points: the hand's sample points; skipBody: a body left out of
-// the model-side share (the forearm, cut by segmentation), -1 for none; tips: the five
-// fingertip keypoints; nearestHints: optional per-point first guesses of the nearest body
-// (only speed depends on them).
-FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const Vec3> points,
-                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips,
-                             std::span<const int> nearestHints = {});
+// bodies: the fitted model; pointDistances: each of the hand's sample points' distance to
+// the model's surface (the error metric's ErrorBreakdown::pointDistance at the same pose,
+// so the points are not queried twice); skipBody: a body left out of the model-side share
+// (the forearm, cut by segmentation), -1 for none; tips: the five fingertip keypoints.
+FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const float> pointDistances,
+                             const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips);
 
 }  // namespace dynahand::track

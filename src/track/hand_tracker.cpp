@@ -120,8 +120,10 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     simulator_.pose(rig_, posed_);
     std::array<Vec3, 5> tips;
     for (std::size_t f = 0; f < 5; ++f) tips[f] = out.keypoints21[4 + 4 * f];
-    out.quality = measureFitQuality(posed_, frame.points, *frame.cloud, rig_.anatomy().forearm,
-                                    tips, simulator_.lastNearestBodies());
+    // bestBreakdown_ was measured at exactly these poses: its point distances are this
+    // pose's.
+    out.quality = measureFitQuality(posed_, bestBreakdown_.pointDistance, *frame.cloud,
+                                    rig_.anatomy().forearm, tips);
   } else {
     out.quality = FitQuality{};
   }

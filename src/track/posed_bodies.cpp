@@ -62,6 +62,43 @@ __attribute__((target("avx"))) float maxPlaneDistanceAvx(const float* nx, const 
   return _mm256_cvtss_f32(m);
 }
 
+// Bounding-sphere lower bounds max(0, |p - c_i| - r_i) for `blocks` blocks of eight bodies
+// (SoA, padded with far spheres); returns the smallest over the first `count` bodies and
+// writes the lowest index holding it to *first (-1 when count is 0).
+__attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float* cx,
+                                                     const float* cy, const float* cz,
+                                                     const float* r, int count, float* bounds,
+                                                     int* first) {
+  const __m256 px = _mm256_set1_ps(p.x()), py = _mm256_set1_ps(p.y()), pz = _mm256_set1_ps(p.z());
+  const __m256 zero = _mm256_setzero_ps();
+  __m256 smallest = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const int blocks = (count + 7) / 8;
+  for (int b = 0; b < blocks; ++b) {
+    const int o = 8 * b;
+    const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(cx + o));
+    const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(cy + o));
+    const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(cz + o));
+    const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                    _mm256_mul_ps(dz, dz));
+    const __m256 bound =
+        _mm256_max_ps(_mm256_sub_ps(_mm256_sqrt_ps(d2), _mm256_loadu_ps(r + o)), zero);
+    _mm256_storeu_ps(bounds + o, bound);
+    smallest = _mm256_min_ps(smallest, bound);
+  }
+  smallest = _mm256_min_ps(smallest, _mm256_permute2f128_ps(smallest, smallest, 1));
+  smallest = _mm256_min_ps(smallest, _mm256_permute_ps(smallest, 0x4E));
+  smallest = _mm256_min_ps(smallest, _mm256_permute_ps(smallest, 0xB1));
+  const float m = _mm256_cvtss_f32(smallest);
+  *first = -1;
+  for (int i = 0; i < count; ++i) {
+    if (bounds[i] == m) {
+      *first = i;
+      break;
+    }
+  }
+  return m;
+}
+
 std::atomic<bool> wideScan{__builtin_cpu_supports("avx") != 0};
 #endif
 
@@ -93,16 +130,28 @@ void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
       }
     }
   }
+  for (std::size_t i = 0; i < kMaxBodies; ++i) {  // far spheres pad the SoA copy
+    sphereX_[i] = sphereY_[i] = sphereZ_[i] = 1e15f;
+    sphereR_[i] = 0.0f;
+  }
   for (std::size_t i = 0; i < shapes.size(); ++i) {
     radii_[i] = shapes_[i]->boundingRadius();
-    centroids_[i] = poses_[i].transform(shapes_[i]->centroid());
+    sphereR_[i] = radii_[i];
+    setCentroid(i, poses_[i].transform(shapes_[i]->centroid()));
   }
+}
+
+void PosedBodies::setCentroid(std::size_t body, const Vec3& centroid) {
+  centroids_[body] = centroid;
+  sphereX_[body] = centroid.x();
+  sphereY_[body] = centroid.y();
+  sphereZ_[body] = centroid.z();
 }
 
 void PosedBodies::setPose(int body, const Pose& pose) {
   const auto i = static_cast<std::size_t>(body);
   poses_[i] = pose;
-  centroids_[i] = pose.transform(shapes_[i]->centroid());
+  setCentroid(i, pose.transform(shapes_[i]->centroid()));
 }
 
 namespace {
@@ -234,14 +283,20 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {
   // Bounding-sphere lower bounds; the body with the smallest goes first for a tight best
   // distance, then every other body whose bound does not exceed it (index order: ties
   // still go to the lower index, as the answer is the same in any order).
-  std::array<float, 32> bounds;
+  std::array<float, kMaxBodies> bounds;
   int first = -1;
-  for (int i = 0; i < size(); ++i) {
-    if (!(mask >> i & 1u)) continue;
-    const auto bi = static_cast<std::size_t>(i);
-    bounds[bi] = std::max(0.0f, (p - centroids_[bi]).norm() - radii_[bi]);
-    if (first < 0 || bounds[bi] < bounds[static_cast<std::size_t>(first)]) first = i;
-  }
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+  if (mask == kAllBodies && wideScan.load(std::memory_order_relaxed)) {
+    sphereBoundsAvx(p, sphereX_.data(), sphereY_.data(), sphereZ_.data(), sphereR_.data(), size(),
+                    bounds.data(), &first);
+  } else
+#endif
+    for (int i = 0; i < size(); ++i) {
+      if (!(mask >> i & 1u)) continue;
+      const auto bi = static_cast<std::size_t>(i);
+      bounds[bi] = std::max(0.0f, (p - centroids_[bi]).norm() - radii_[bi]);
+      if (first < 0 || bounds[bi] < bounds[static_cast<std::size_t>(first)]) first = i;
+    }
   SurfaceHit best;
   best.distance = std::numeric_limits<float>::infinity();
   auto test = [&](int i) {

@@ -3,6 +3,7 @@
 // through which face. Shared by the surface constraints and the error metric.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -74,8 +75,14 @@ class PosedBodies {
   std::vector<const physics::ConvexShape*> tableShapes_;  // shapes the tables were built for
   std::vector<PlaneTable> planes_;
   std::vector<Pose> poses_;
+  static constexpr std::size_t kMaxBodies = 32;  // BodyMask bits
+  void setCentroid(std::size_t body, const Vec3& centroid);
+
   std::vector<Vec3> centroids_;  // world centroid of each body
   std::vector<float> radii_;     // bounding radius about the centroid
+  // The bounding spheres again as SoA (centres, radii), padded with far spheres, for
+  // eight-wide bounds.
+  std::array<float, kMaxBodies> sphereX_{}, sphereY_{}, sphereZ_{}, sphereR_{};
 };
 
 }  // namespace dynahand::track

@@ -95,6 +95,7 @@ int runTrack(const TrackOptions& o) {
   settings.hands = o.hands;
   settings.perFrame = o.perFrame;
   settings.threads = o.threads;
+  settings.keepCandidates = o.candidates;
   for (const auto& name : o.disable) {
     bool found = false;
     for (int k = 0; k < track::kStrategyCount; ++k) {

@@ -86,6 +86,7 @@ Result<std::unique_ptr<ServeSession>> ServeSession::open(const ServeOptions& o) 
   Impl& s = *impl;
   s.options = o;
   track::TrackerSettings settings = o.settings;
+  settings.keepCandidates = true;  // the viewer draws the losing simulations
   const model::HandDimensions dims{o.handLength, o.handWidth};
   if (o.input.rfind("synth:", 0) == 0) {
     synth::SynthOptions so;

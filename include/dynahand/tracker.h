@@ -63,7 +63,11 @@ struct TrackerSettings {
   bool perFrame = false;
   int acquisitionSubsteps = 24;  // physics steps when fitting from a canonical pose
   float flipPeriodS = 0.5f;      // finger-flip choice cycles this often (sequence time)
-  bool keepCandidates = true;    // report every simulation's pose (for pictures)
+  // Report every simulation's pose and full error (for pictures of the losing candidates).
+  // Off, a losing simulation's error metric stops as soon as it is sure to lose, so its
+  // Candidate::error is only a lower bound and its pose is not kept; the winner, its error
+  // and the tracking results are the same bits either way.
+  bool keepCandidates = false;
 };
 
 // How well the fitted hand explains the data (beyond the paper's metric):
@@ -79,7 +83,7 @@ struct FitQuality {
 struct Candidate {
   StrategyKind kind = StrategyKind::Normal;
   bool ran = false;    // e.g. the detector did not fire
-  float error = 0.0f;  // m, the paper's errTotal
+  float error = 0.0f;  // m, the paper's errTotal (a lower bound for a loser, see keepCandidates)
   model::ModelPose pose;
 };
 

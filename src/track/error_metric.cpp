@@ -16,35 +16,61 @@ bool inFreeSpace(const Vec3& point, const DepthFrame& depth, const Intrinsics& i
   return raw == 0 || depth.metres(u, v) >= point.z();
 }
 
-void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
-                  const FreeSpaceTest& isFree, ErrorBreakdown& out,
-                  std::span<const int> nearestHints) {
+namespace {
+
+// The paper's sums, in body order (the same additions whether or not every point was seen).
+void sumTotals(ErrorBreakdown& out) {
+  out.fitTotal = 0.0f;
+  out.occlusionTotal = 0.0f;
+  for (std::size_t i = 0; i < out.fit.size(); ++i) {
+    out.fitTotal += out.fit[i];
+    out.occlusionTotal += out.occlusion[i];
+  }
+  out.total = out.fitTotal + out.occlusionTotal;
+}
+
+}  // namespace
+
+bool computeErrorBounded(const PosedBodies& bodies, std::span<const Vec3> points,
+                         const FreeSpaceTest& isFree, float abortAbove, ErrorBreakdown& out,
+                         std::span<const int> nearestHints, std::span<const int> order) {
   const auto n = static_cast<std::size_t>(bodies.size());
   out.fit.assign(n, 0.0f);
   out.occlusion.assign(n, 0.0f);
   out.pointCount.assign(n, 0);
   out.pointDistance.assign(points.size(), std::numeric_limits<float>::infinity());
-  const bool hinted = nearestHints.size() == points.size();
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    const Vec3& p = points[k];
-    const SurfaceHit hit = bodies.nearest(p, kAllBodies, hinted ? nearestHints[k] : -1);
-    if (hit.body < 0) continue;
-    out.pointDistance[k] = hit.distance;
-    const auto i = static_cast<std::size_t>(hit.body);
-    out.fit[i] = std::max(out.fit[i], hit.distance);
-    ++out.pointCount[i];
-  }
-  out.fitTotal = 0.0f;
-  out.occlusionTotal = 0.0f;
+  // Occlusion first: it is cheap and raises the bound from the start.
   for (std::size_t i = 0; i < n; ++i) {
     const int body = static_cast<int>(i);
-    if (isFree(bodies.worldCentroid(body))) {
-      out.occlusion[i] = bodies.shape(body).inscribedRadius();
-    }
-    out.fitTotal += out.fit[i];
-    out.occlusionTotal += out.occlusion[i];
+    if (isFree(bodies.worldCentroid(body))) out.occlusion[i] = bodies.shape(body).inscribedRadius();
   }
-  out.total = out.fitTotal + out.occlusionTotal;
+  const bool hinted = nearestHints.size() == points.size();
+  const bool ordered = order.size() == points.size();
+  constexpr std::size_t kCheckEvery = 64;  // points between bound checks
+  for (std::size_t j = 0; j < points.size(); ++j) {
+    const std::size_t k = ordered ? static_cast<std::size_t>(order[j]) : j;
+    const SurfaceHit hit = bodies.nearest(points[k], kAllBodies, hinted ? nearestHints[k] : -1);
+    if (hit.body >= 0) {
+      out.pointDistance[k] = hit.distance;
+      const auto i = static_cast<std::size_t>(hit.body);
+      out.fit[i] = std::max(out.fit[i], hit.distance);
+      ++out.pointCount[i];
+    }
+    if ((j + 1) % kCheckEvery == 0) {
+      // Rounding is monotonic: these sums of smaller terms never exceed the final ones.
+      sumTotals(out);
+      if (out.total > abortAbove) return false;
+    }
+  }
+  sumTotals(out);
+  return out.total <= abortAbove;
+}
+
+void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
+                  const FreeSpaceTest& isFree, ErrorBreakdown& out,
+                  std::span<const int> nearestHints) {
+  computeErrorBounded(bodies, points, isFree, std::numeric_limits<float>::infinity(), out,
+                      nearestHints);
 }
 
 }  // namespace dynahand::track

@@ -37,6 +37,16 @@ void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
                   const FreeSpaceTest& isFree, ErrorBreakdown& out,
                   std::span<const int> nearestHints = {});
 
+// computeError that gives up as soon as the total is sure to exceed `abortAbove` (m): the
+// per-body maxima only grow, so the sum so far is a lower bound. Returns true with exactly
+// computeError's result (same bits) when the total stays at or below abortAbove; false
+// otherwise, with `out.total` a lower bound above abortAbove (the rest of `out` partial).
+// order: optional, the point indices in the order to visit (points likely to be far from
+// the model first make a losing candidate give up sooner); the result does not depend on it.
+bool computeErrorBounded(const PosedBodies& bodies, std::span<const Vec3> points,
+                         const FreeSpaceTest& isFree, float abortAbove, ErrorBreakdown& out,
+                         std::span<const int> nearestHints = {}, std::span<const int> order = {});
+
 // True when the pixel under `point` shows background farther than it or no data,
 // i.e. the point sits in space the camera saw to be empty. False outside the image.
 bool inFreeSpace(const Vec3& point, const DepthFrame& depth, const Intrinsics& intrinsics);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <numeric>
 
 namespace dynahand::track {
 
@@ -93,6 +94,43 @@ float HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const Hand
   return error.total;
 }
 
+void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
+  // In lane order (whatever the thread count, so the results are the same): the first
+  // candidate is measured in full; each later one gives up once it is sure to lose to the
+  // best so far, visiting first the points farthest from the first candidate's model (a
+  // losing pose is usually off on the same points). The winner is measured in full, so its
+  // error and breakdown are exactly computeError's.
+  const CloudFrame* cloud = frame.cloud;
+  const FreeSpaceTest isFree = [cloud](const Vec3& p) {
+    return cloud != nullptr && cloud->isFree(p);
+  };
+  float best = std::numeric_limits<float>::infinity();
+  metricOrder_.clear();
+  for (auto& lanePtr : lanes_) {
+    Lane& lane = *lanePtr;
+    if (!lane.candidate.ran) continue;
+    lane.simulator.pose(lane.rig, lane.posed);
+    if (computeErrorBounded(lane.posed, frame.points, isFree, best, lane.error,
+                            lane.simulator.lastNearestBodies(), metricOrder_)) {
+      best = std::min(best, lane.error.total);
+    }
+    lane.candidate.error = lane.error.total;
+    if (metricOrder_.empty()) {
+      const auto& distance = lane.error.pointDistance;
+      metricOrder_.resize(distance.size());
+      std::iota(metricOrder_.begin(), metricOrder_.end(), 0);
+      const auto farFirst = [&distance](int a, int b) {
+        const float da = distance[static_cast<std::size_t>(a)];
+        const float db = distance[static_cast<std::size_t>(b)];
+        return da > db || (da == db && a < b);
+      };
+      const auto head = metricOrder_.begin() +
+                        static_cast<std::ptrdiff_t>(metricOrder_.size() / kMetricHeadFraction);
+      std::nth_element(metricOrder_.begin(), head, metricOrder_.end(), farFirst);
+    }
+  }
+}
+
 float HandTracker::evaluate(const HandFrame& frame) {
   return evaluate(simulator_, rig_, frame, posed_, error_);
 }
@@ -155,9 +193,9 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     candidate.kind = lane.strategy->kind();
     candidate.error = 0.0f;
     candidate.ran = lane.strategy->run(context);
-    if (!candidate.ran) return;
+    if (!candidate.ran || !settings_.keepCandidates) return;
     candidate.error = evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error);
-    if (settings_.keepCandidates) lane.rig.readPose(candidate.pose);
+    lane.rig.readPose(candidate.pose);
   };
   const int count = static_cast<int>(lanes_.size());
   if (pool_ != nullptr) {
@@ -165,6 +203,7 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   } else {
     for (int i = 0; i < count; ++i) runLane(i);
   }
+  if (!settings_.keepCandidates) evaluateUntilBeaten(frame);
   // The winner, in strategy order (ties to the earlier strategy).
   float bestError = std::numeric_limits<float>::infinity();
   StrategyKind bestKind = StrategyKind::Normal;

@@ -43,6 +43,11 @@ class HandTracker {
   static float evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
                         PosedBodies& posed, ErrorBreakdown& error);
   float evaluate(const HandFrame& frame);  // of rig_, into error_
+  // Each lane's candidate.error and lane.error, stopping a candidate's metric once it cannot
+  // win (see computeErrorBounded): its error is then only a lower bound.
+  void evaluateUntilBeaten(const HandFrame& frame);
+  // The farthest 1/kMetricHeadFraction of the points go first in evaluateUntilBeaten.
+  static constexpr std::size_t kMetricHeadFraction = 5;
   void runStrategies(const HandFrame& frame, HandResult& out);
   void acquire(const HandFrame& frame, HandResult& out);
   // The open hand placed at the cloud: fingers along axisImage (wrist -> tips), thumb
@@ -74,6 +79,7 @@ class HandTracker {
   PosedBodies posed_;
   ErrorBreakdown error_;          // of the last evaluate()
   ErrorBreakdown bestBreakdown_;  // of the state the world holds after a frame
+  std::vector<int> metricOrder_;  // point order for evaluateUntilBeaten
   bool tracked_ = false;
   int badFrames_ = 0;
 };

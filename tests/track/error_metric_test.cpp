@@ -122,6 +122,38 @@ TEST(ErrorMetric, MatchesBruteForceOnRandomPoses) {
   }
 }
 
+// The bounded metric: the same bits as computeError when the total stays under the bound,
+// whatever the point order; otherwise it stops with a lower bound above the bound.
+TEST(ErrorMetric, BoundedVersionIsExactUnderTheBoundAndALowerBoundAbove) {
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    Scene s = randomScene(seed);
+    PosedBodies bodies;
+    bodies.set(s.shapePtrs, s.poses);
+    const FreeSpaceTest isFree = [&](const Vec3& c) {
+      return inFreeSpace(c, s.depth, s.intrinsics);
+    };
+    ErrorBreakdown full;
+    computeError(bodies, s.points, isFree, full);
+    std::vector<int> reversed(s.points.size());
+    for (std::size_t k = 0; k < reversed.size(); ++k)
+      reversed[k] = static_cast<int>(reversed.size() - 1 - k);
+
+    ErrorBreakdown bounded;
+    ASSERT_TRUE(computeErrorBounded(bodies, s.points, isFree, full.total, bounded, {}, reversed));
+    EXPECT_EQ(bounded.total, full.total);
+    EXPECT_EQ(bounded.fit, full.fit);
+    EXPECT_EQ(bounded.occlusion, full.occlusion);
+    EXPECT_EQ(bounded.pointCount, full.pointCount);
+    EXPECT_EQ(bounded.pointDistance, full.pointDistance);
+
+    const float bound = 0.5f * full.total;
+    ErrorBreakdown stopped;
+    EXPECT_FALSE(computeErrorBounded(bodies, s.points, isFree, bound, stopped, {}, reversed));
+    EXPECT_GT(stopped.total, bound);
+    EXPECT_LE(stopped.total, full.total);
+  }
+}
+
 TEST(ErrorMetric, PerfectFitHasNoFitError) {
   // Points sampled on the visible surface of one box give errFit = 0 for it.
   std::vector<physics::ConvexShape> shapes{physics::ConvexShape::box(Vec3(0.02f, 0.02f, 0.02f))};

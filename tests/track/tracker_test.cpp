@@ -67,38 +67,48 @@ TEST(Tracker, FollowsSlowOpenClose) {
 }
 
 // Same input, same output bits: twice on one thread, and with the simulations spread over
-// three threads (every simulation's pose, not only the winner's).
+// three threads; with every simulation's pose and full error kept, and without (then losing
+// simulations stop their metric early, in the same order for any thread count). The winner
+// is the same either way.
 TEST(Tracker, IsDeterministicForAnyThreadCount) {
   synth::SynthOptions o;
   o.clip = "wave";
   o.frameCount = 6;
   auto seq = synth::SyntheticSequence::create(o);
   ASSERT_TRUE(seq.ok());
-  std::uint64_t hashes[3];
-  const int threads[3] = {1, 1, 3};
-  for (int run = 0; run < 3; ++run) {
-    TrackerSettings settings;
-    settings.threads = threads[run];
-    auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
-    ASSERT_TRUE(tracker.ok());
-    Fnv1a h;
-    int candidates = 0;
-    for (int f = 0; f < 6; ++f) {
-      const auto& frame = seq->frame(f);
-      if (f == 0) (*tracker)->initialize(frame.hands[0].pose);
-      const HandResult& hand = (*tracker)->track(frame.depth).hands[0];
-      for (const Pose& p : hand.pose.bodies) h.add(p);
-      for (const Candidate& c : hand.candidates) {
-        h.add(c.error);
-        for (const Pose& p : c.pose.bodies) h.add(p);
-        candidates += c.ran ? 1 : 0;
+  std::uint64_t winners[2] = {0, 0};
+  for (const bool keep : {true, false}) {
+    std::uint64_t hashes[3];
+    const int threads[3] = {1, 1, 3};
+    for (int run = 0; run < 3; ++run) {
+      TrackerSettings settings;
+      settings.threads = threads[run];
+      settings.keepCandidates = keep;
+      auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
+      ASSERT_TRUE(tracker.ok());
+      Fnv1a h, winner;
+      int candidates = 0;
+      for (int f = 0; f < 6; ++f) {
+        const auto& frame = seq->frame(f);
+        if (f == 0) (*tracker)->initialize(frame.hands[0].pose);
+        const HandResult& hand = (*tracker)->track(frame.depth).hands[0];
+        for (const Pose& p : hand.pose.bodies) winner.add(p);
+        winner.add(hand.error);
+        for (const Candidate& c : hand.candidates) {
+          h.add(c.error);
+          for (const Pose& p : c.pose.bodies) h.add(p);
+          candidates += c.ran ? 1 : 0;
+        }
       }
+      EXPECT_GE(candidates, 6 * 4) << "most simulations ran";
+      h.add(winner.value());
+      hashes[run] = h.value();
+      winners[keep ? 0 : 1] = winner.value();
     }
-    EXPECT_GE(candidates, 6 * 4) << "most simulations ran";
-    hashes[run] = h.value();
+    EXPECT_EQ(hashes[0], hashes[1]);
+    EXPECT_EQ(hashes[0], hashes[2]) << "three threads give other bits than one";
   }
-  EXPECT_EQ(hashes[0], hashes[1]);
-  EXPECT_EQ(hashes[0], hashes[2]) << "three threads give other bits than one";
+  EXPECT_EQ(winners[0], winners[1]) << "keeping the candidates changed the tracking";
 }
 
 TEST(Tracker, EmptyFramesMeanLostNotACrash) {

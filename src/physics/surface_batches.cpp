@@ -23,12 +23,50 @@ void SurfaceBatches::reserve(int rows) {
 
 void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
                            const std::vector<SolverBody>& bodies, int dummySlot) {
-  const int slotCount = static_cast<int>(bodies.size());
+  slotCount_ = static_cast<int>(bodies.size());
   const int n = static_cast<int>(rows.size());
-  const auto slots = static_cast<std::size_t>(slotCount);
-  // Rows grouped by slot (counting sort, stable), slots by decreasing row count.
-  count_.assign(slots, 0);
+  // Slots with more rows than a four-wide sweep has batches are split (see the header).
+  const int target = std::max(1, (n + 3) / 4);
+  count_.assign(static_cast<std::size_t>(slotCount_), 0);
   for (const PreparedSurfaceRow& r : rows) ++count_[static_cast<std::size_t>(r.slot)];
+  splits_.clear();
+  int copyCount = 0;
+  for (int s = 0; s < slotCount_; ++s) {
+    const int c = count_[static_cast<std::size_t>(s)];
+    if (c <= target) continue;
+    const int copies = (c + target - 1) / target;
+    splits_.push_back({s, copyCount, copies});
+    copyCount += copies;
+  }
+  copies_.resize(static_cast<std::size_t>(copyCount));
+  // Each row's solving slot: its own, or for a split slot the copies in turn (so that every
+  // copy sees rows from all over the body).
+  virtualSlot_.resize(static_cast<std::size_t>(n));
+  {
+    std::vector<int>& turn = start_;  // scratch: rows seen so far per slot
+    turn.assign(static_cast<std::size_t>(slotCount_), 0);
+    std::vector<int>& splitOf = slotsByCount_;  // scratch: split index per slot, -1 none
+    splitOf.assign(static_cast<std::size_t>(slotCount_), -1);
+    for (std::size_t k = 0; k < splits_.size(); ++k)
+      splitOf[static_cast<std::size_t>(splits_[k].slot)] = static_cast<int>(k);
+    for (int i = 0; i < n; ++i) {
+      const int slot = rows[static_cast<std::size_t>(i)].slot;
+      const int k = splitOf[static_cast<std::size_t>(slot)];
+      if (k < 0) {
+        virtualSlot_[static_cast<std::size_t>(i)] = slot;
+        continue;
+      }
+      const Split& sp = splits_[static_cast<std::size_t>(k)];
+      const int j = turn[static_cast<std::size_t>(slot)]++ % sp.copies;
+      virtualSlot_[static_cast<std::size_t>(i)] = slotCount_ + sp.first + j;
+    }
+  }
+  const int slotCountAll = slotCount_ + copyCount;
+  const auto slots = static_cast<std::size_t>(slotCountAll);
+  // Rows grouped by solving slot (counting sort, stable), slots by decreasing row count.
+  count_.assign(slots, 0);
+  for (int i = 0; i < n; ++i)
+    ++count_[static_cast<std::size_t>(virtualSlot_[static_cast<std::size_t>(i)])];
   start_.assign(slots + 1, 0);
   for (std::size_t s = 0; s < slots; ++s) start_[s + 1] = start_[s] + count_[s];
   order_.resize(static_cast<std::size_t>(n));
@@ -37,7 +75,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     for (std::size_t s = 0; s < slots; ++s) next[s] = start_[s];
     for (int i = 0; i < n; ++i)
       order_[static_cast<std::size_t>(
-          next[static_cast<std::size_t>(rows[static_cast<std::size_t>(i)].slot)]++)] = i;
+          next[static_cast<std::size_t>(virtualSlot_[static_cast<std::size_t>(i)])]++)] = i;
   }
   slotsByCount_.resize(slots);
   std::iota(slotsByCount_.begin(), slotsByCount_.end(), 0);
@@ -72,12 +110,18 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     }
   }
   int position = 0;
+  auto copiesOf = [&](int slot) {
+    for (const Split& sp : splits_)
+      if (sp.slot == slot) return sp.copies;
+    return 1;
+  };
   auto deal = [&](int o) {
     const int i = order_[static_cast<std::size_t>(o)];
     const PreparedSurfaceRow& r = rows[static_cast<std::size_t>(i)];
     Batch& b = batches_[static_cast<std::size_t>(position % batchCount)];
     const int k = position / batchCount;
-    b.slot[k] = r.slot;
+    const int solveSlot = virtualSlot_[static_cast<std::size_t>(i)];
+    b.slot[k] = solveSlot;
     b.row[k] = i;
     b.nx[k] = r.normal.x();
     b.ny[k] = r.normal.y();
@@ -85,14 +129,25 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     b.ax[k] = r.ang.x();
     b.ay[k] = r.ang.y();
     b.az[k] = r.ang.z();
-    b.ix[k] = r.invIAng.x();
-    b.iy[k] = r.invIAng.y();
-    b.iz[k] = r.invIAng.z();
-    b.effMass[k] = r.effMass;
     const float invMass = bodies[static_cast<std::size_t>(r.slot)].invMass;
-    b.ux[k] = r.normal.x() * invMass;
-    b.uy[k] = r.normal.y() * invMass;
-    b.uz[k] = r.normal.z() * invMass;
+    if (solveSlot == r.slot) {
+      b.ix[k] = r.invIAng.x();
+      b.iy[k] = r.invIAng.y();
+      b.iz[k] = r.invIAng.z();
+      b.effMass[k] = r.effMass;
+      b.ux[k] = r.normal.x() * invMass;
+      b.uy[k] = r.normal.y() * invMass;
+      b.uz[k] = r.normal.z() * invMass;
+    } else {  // a copy holding 1/copies of the mass: inverse mass and inertia times copies
+      const auto copies = static_cast<float>(copiesOf(r.slot));
+      b.ix[k] = r.invIAng.x() * copies;
+      b.iy[k] = r.invIAng.y() * copies;
+      b.iz[k] = r.invIAng.z() * copies;
+      b.effMass[k] = r.effMass / copies;
+      b.ux[k] = r.normal.x() * (invMass * copies);
+      b.uy[k] = r.normal.y() * (invMass * copies);
+      b.uz[k] = r.normal.z() * (invMass * copies);
+    }
     b.bias[k] = r.bias;
     b.relaxBias[k] = r.relaxBias;
     b.lower[k] = r.lower;
@@ -107,6 +162,32 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     const int end = start_[static_cast<std::size_t>(slot) + 1];
     for (int residue = 0; residue < kSpread; ++residue)
       for (int o = first + residue; o < end; o += kSpread) deal(o);
+  }
+}
+
+float* SurfaceBatches::laneBody(std::vector<SolverBody>& bodies, int slot) {
+  return slot < slotCount_ ? bodies[static_cast<std::size_t>(slot)].v.data()
+                           : copies_[static_cast<std::size_t>(slot - slotCount_)].v.data();
+}
+
+void SurfaceBatches::beginCopies(const std::vector<SolverBody>& bodies) {
+  for (const Split& sp : splits_)
+    for (int j = 0; j < sp.copies; ++j)
+      copies_[static_cast<std::size_t>(sp.first + j)] = bodies[static_cast<std::size_t>(sp.slot)];
+}
+
+void SurfaceBatches::endCopies(std::vector<SolverBody>& bodies) const {
+  // The copies' average: each row moved its copy by copies x its share, so the average moved
+  // by exactly what that row's impulse does to the whole body.
+  for (const Split& sp : splits_) {
+    Vec3 v = Vec3::Zero(), w = Vec3::Zero();
+    for (int j = 0; j < sp.copies; ++j) {
+      v += copies_[static_cast<std::size_t>(sp.first + j)].v;
+      w += copies_[static_cast<std::size_t>(sp.first + j)].w;
+    }
+    const float share = 1.0f / static_cast<float>(sp.copies);
+    bodies[static_cast<std::size_t>(sp.slot)].v = v * share;
+    bodies[static_cast<std::size_t>(sp.slot)].w = w * share;
   }
 }
 
@@ -159,16 +240,17 @@ struct LaneBodies {
 void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
   static_assert(offsetof(SolverBody, invMass) == 12 && offsetof(SolverBody, w) == 16);
   if (batches_.empty()) return;
+  beginCopies(bodies);
   float* p[4];
   __m128i slots = _mm_load_si128(reinterpret_cast<const __m128i*>(batches_[0].slot));
-  for (int k = 0; k < 4; ++k) p[k] = bodies[static_cast<std::size_t>(batches_[0].slot[k])].v.data();
+  for (int k = 0; k < 4; ++k) p[k] = laneBody(bodies, batches_[0].slot[k]);
   LaneBodies lane;
   lane.load(p);
   for (Batch& b : batches_) {
     const __m128i next = _mm_load_si128(reinterpret_cast<const __m128i*>(b.slot));
     if (_mm_movemask_epi8(_mm_cmpeq_epi32(next, slots)) != 0xFFFF) {
       lane.store(p);
-      for (int k = 0; k < 4; ++k) p[k] = bodies[static_cast<std::size_t>(b.slot[k])].v.data();
+      for (int k = 0; k < 4; ++k) p[k] = laneBody(bodies, b.slot[k]);
       lane.load(p);
       slots = next;
     }
@@ -196,12 +278,14 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
     lane.wz = _mm_add_ps(lane.wz, _mm_mul_ps(d, _mm_load_ps(b.iz)));
   }
   lane.store(p);
+  endCopies(bodies);
 }
 #else
 void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
+  beginCopies(bodies);
   for (Batch& b : batches_) {
     for (int k = 0; k < 4; ++k) {
-      SolverBody& body = bodies[static_cast<std::size_t>(b.slot[k])];
+      SolverBody& body = *reinterpret_cast<SolverBody*>(laneBody(bodies, b.slot[k]));
       const Vec3 n(b.nx[k], b.ny[k], b.nz[k]);
       const float jv = n.dot(body.v) + Vec3(b.ax[k], b.ay[k], b.az[k]).dot(body.w);
       const float old = b.impulse[k];
@@ -213,6 +297,7 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
       body.w += d * Vec3(b.ix[k], b.iy[k], b.iz[k]);
     }
   }
+  endCopies(bodies);
 }
 #endif
 

@@ -2,8 +2,11 @@
 // four to a batch, the four on different solver slots, and solved four at a time with SSE.
 // Within a batch the rows touch different bodies, so solving them together is the same as
 // solving them one after another: still projected Gauss-Seidel, in batch order. Rows are
-// dealt into batches so that a slot's rows never share one (a slot with more rows than there
-// are batches gets batches of its own, padded with inert lanes).
+// dealt into batches so that a slot's rows never share one. A slot holding more than a
+// quarter of the rows (a welded hand: all of them) would make batches of its own, three lanes
+// idle; its rows are instead spread over several copies of the slot, each with that share of
+// its mass, whose velocities are averaged after every sweep (mass splitting, Tonge et al.
+// 2012), so the sweep stays four rows wide.
 #pragma once
 
 #include <vector>
@@ -42,8 +45,20 @@ class SurfaceBatches {
     float ux[4], uy[4], uz[4];  // normal * the body's inverse mass
     float effMass[4], bias[4], relaxBias[4], lower[4], upper[4], impulse[4];
   };
+  // A slot whose rows are spread over `copies` copies, solver slots `first`... of copies_.
+  struct Split {
+    int slot, first, copies;
+  };
+  float* laneBody(std::vector<SolverBody>& bodies, int slot);
+  void beginCopies(const std::vector<SolverBody>& bodies);  // every copy = its slot
+  void endCopies(std::vector<SolverBody>& bodies) const;    // each split slot = its copies' mean
+
   std::vector<Batch> batches_;
   std::vector<int> order_, count_, start_, slotsByCount_;
+  std::vector<int> virtualSlot_;  // (rows) the slot or copy a row is solved on
+  std::vector<Split> splits_;
+  std::vector<SolverBody> copies_;
+  int slotCount_ = 0;  // real solver slots; copies are numbered after them
 };
 
 }  // namespace dynahand::physics

@@ -224,6 +224,49 @@ TEST(SurfaceRows, MajorityOverpowersOutliers) {
   EXPECT_LT(Eigen::AngleAxisf(w.pose(b).q).angle(), 2.0f * kDeg);
 }
 
+// A body holding every surface row is solved over four copies of itself (mass splitting);
+// the same rows with three more bodies holding as many rows each are solved on the body
+// itself. Both fits agree: splitting changes how a sweep converges, not the answer.
+TEST(SurfaceRows, BodyHoldingEveryRowFitsAsWhenItHoldsAQuarter) {
+  const Vec3 shift(0.008f, -0.004f, 0.005f);
+  const Quat turn(Eigen::AngleAxisf(0.1f, Vec3(0.3f, 1.0f, 0.2f).normalized()));
+  Pose fitted[2];
+  for (int others = 0; others < 2; ++others) {
+    World w;
+    const int box = w.addShape(ConvexShape::box(Vec3(0.02f, 0.015f, 0.01f)));
+    std::vector<BodyId> bodies;
+    for (int k = 0; k < (others == 1 ? 4 : 1); ++k) {
+      BodyDef d;
+      d.shape = box;
+      d.pose.p = Vec3(0.2f * static_cast<float>(k), 0, 0);  // far apart: no contacts
+      bodies.push_back(w.addBody(d));
+    }
+    for (const BodyId b : bodies)
+      w.setDamping(b, dampingFromRetention(0.8f, kDt), dampingFromRetention(0.8f, kDt));
+    const ConvexShape& s = w.bodyShape(bodies[0]);
+    for (int step = 0; step < 40; ++step) {
+      w.rows().clear();
+      for (const BodyId b : bodies) {
+        const Pose target{Vec3(0.2f * static_cast<float>(b), 0, 0) + shift, turn};
+        for (std::size_t f = 0; f < s.faces().size(); ++f) {
+          for (const int v : s.faces()[f].vertices) {
+            const Vec3 anchor = 0.8f * s.vertices()[static_cast<std::size_t>(v)];
+            const Vec3 local = anchor + 0.01f * s.faces()[f].normal;
+            w.rows().addSurface(b, local, w.pose(b).rotate(s.faces()[f].normal),
+                                target.transform(local), 0.05f);
+          }
+        }
+      }
+      w.step(kDt);
+    }
+    fitted[others] = w.pose(bodies[0]);
+  }
+  EXPECT_LT((fitted[0].p - shift).norm(), 2e-4f);
+  EXPECT_LT((fitted[0].p - fitted[1].p).norm(), 2e-4f);
+  EXPECT_LT(fitted[0].q.angularDistance(fitted[1].q), 0.5f * kDeg);
+  EXPECT_LT(fitted[0].q.angularDistance(turn), 0.5f * kDeg);
+}
+
 TEST(SurfaceRows, PullsBodyPointOntoTarget) {
   BodyId b = 0;
   World w = freeBoxWorld(&b);

@@ -99,7 +99,13 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
   return m;
 }
 
-std::atomic<bool> wideScan{__builtin_cpu_supports("avx") != 0};
+// Static initialisers may run before the library's own CPU detection: run it first.
+bool cpuHasAvx() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx") != 0;
+}
+
+std::atomic<bool> wideScan{cpuHasAvx()};
 #endif
 
 }  // namespace
@@ -172,7 +178,7 @@ float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
 
 bool PosedBodies::useWidePlaneScan(bool enabled) {
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
-  wideScan.store(enabled && __builtin_cpu_supports("avx") != 0);
+  wideScan.store(enabled && cpuHasAvx());
   return wideScan.load();
 #else
   (void)enabled;

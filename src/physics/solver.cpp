@@ -204,6 +204,37 @@ class FlushDenormals {
 };
 }  // namespace
 
+namespace {
+// The tracker's thousand surface rows, prepared for the batches. A function of its own: inside
+// World::step (one very large function) the compiler stopped inlining the quaternion rotation
+// and inertia products per row; here they inline, with the same arithmetic.
+[[gnu::flatten, gnu::noinline]] void prepareSurfaceRows(World::Impl& m, const WorldState& s,
+                                                        const SurfaceRows& rows, float erp,
+                                                        float invH) {
+  const std::size_t count = rows.body.size();
+  m.surfaceRows.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto body = static_cast<std::size_t>(rows.body[i]);
+    assert(body < m.bodies.size() && "surface row: bad body");
+    const int slot = m.slotOf(s, static_cast<BodyId>(body));
+    const SolverBody& b = m.solverBodies[static_cast<std::size_t>(slot)];
+    const Vec3 world =
+        s.position[body] + s.orientation[body] * Vec3(rows.anchor[i] - m.bodies[body].centroid);
+    const Vec3 r = world - m.slotPosition[static_cast<std::size_t>(slot)];
+    const Vec3& nrm = rows.normal[i];
+    const Vec3 ang = r.cross(nrm);
+    const Vec3 invIAng = applyInvInertia(b, ang);
+    const float k = b.invMass * nrm.squaredNorm() + ang.dot(invIAng);
+    const float c = nrm.dot(world - rows.target[i]);
+    const Bias bias =
+        rows.lower[i] >= 0.0f ? oneSidedBias(c, erp, invH) : twoSidedBias(c, erp, invH);
+    m.surfaceRows[i] = {
+        slot,       nrm,        ang,           invIAng,      k > 0.0f ? 1.0f / k : 0.0f,
+        bias.solve, bias.relax, rows.lower[i], rows.upper[i]};
+  }
+}
+}  // namespace
+
 void World::step(float h) {
   assert(h > 0.0f && std::isfinite(h) && "step: dt must be positive");
   const FlushDenormals flushDenormals;
@@ -446,32 +477,7 @@ void World::step(float h) {
   }
 
   // Surface rows (one body each), packed four to a batch on different slots.
-  const std::size_t surfCount = rows_.body.size();
-  m.surfaceRows.resize(surfCount);
-  for (std::size_t i = 0; i < surfCount; ++i) {
-    const auto body = static_cast<std::size_t>(rows_.body[i]);
-    assert(body < n && "surface row: bad body");
-    const int slot = slotOf(body);
-    const SolverBody& b = m.solverBodies[static_cast<std::size_t>(slot)];
-    Vec3 world;
-    const Vec3 r = armOf(body, rows_.anchor[i] - m.bodies[body].centroid, &world);
-    const Vec3& nrm = rows_.normal[i];
-    const Vec3 ang = r.cross(nrm);
-    const Vec3 invIAng = applyInvInertia(b, ang);
-    const float k = b.invMass * nrm.squaredNorm() + ang.dot(invIAng);
-    const float c = nrm.dot(world - rows_.target[i]);
-    const Bias bias = rows_.lower[i] >= 0.0f ? oneSidedBias(c, settings_.surfaceErp, invH)
-                                             : twoSidedBias(c, settings_.surfaceErp, invH);
-    m.surfaceRows[i] = {slot,
-                        nrm,
-                        ang,
-                        invIAng,
-                        k > 0.0f ? 1.0f / k : 0.0f,
-                        bias.solve,
-                        bias.relax,
-                        rows_.lower[i],
-                        rows_.upper[i]};
-  }
+  prepareSurfaceRows(m, s, rows_, settings_.surfaceErp, invH);
   m.surfaceBatches.build(m.surfaceRows, m.solverBodies, dummy);
 
   // --- Warm start, solve with bias, integrate positions, relax. ---

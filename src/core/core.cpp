@@ -1,3 +1,5 @@
+// The out-of-line parts of dynahand/core.h: hashing, pose interpolation, the opposite-vector
+// case of shortestRotation.
 #include "dynahand/core.h"
 
 namespace dynahand {

@@ -70,6 +70,24 @@ Status checkIntrinsics(const Intrinsics& k, const std::string& name) {
   return Ok{};
 }
 
+// Intrinsics from {width, height, fx, fy, cx, cy} read from a file, checked; widthKey and
+// heightKey name the first two in messages.
+Result<Intrinsics> intrinsicsFrom(const double values[6], const char* widthKey,
+                                  const char* heightKey, const std::string& name) {
+  auto width = pixelCount(values[0], widthKey, name);
+  if (!width) return width.error();
+  auto height = pixelCount(values[1], heightKey, name);
+  if (!height) return height.error();
+  const Intrinsics k{*width,
+                     *height,
+                     static_cast<float>(values[2]),
+                     static_cast<float>(values[3]),
+                     static_cast<float>(values[4]),
+                     static_cast<float>(values[5])};
+  if (auto ok = checkIntrinsics(k, name); !ok) return ok.error();
+  return k;
+}
+
 // Shortest text that reads back as exactly the same float.
 std::string shortest(float value) {
   char buffer[32];
@@ -108,17 +126,9 @@ Result<CameraDescription> parseCameraJson(std::string_view text, const std::stri
     if (!value) return value.error();
     values[i] = *value;
   }
-  auto width = pixelCount(values[0], "width", name);
-  if (!width) return width.error();
-  auto height = pixelCount(values[1], "height", name);
-  if (!height) return height.error();
-  camera.intrinsics = {*width,
-                       *height,
-                       static_cast<float>(values[2]),
-                       static_cast<float>(values[3]),
-                       static_cast<float>(values[4]),
-                       static_cast<float>(values[5])};
-  if (auto ok = checkIntrinsics(camera.intrinsics, name); !ok) return ok.error();
+  auto intrinsics = intrinsicsFrom(values, "width", "height", name);
+  if (!intrinsics) return intrinsics.error();
+  camera.intrinsics = *intrinsics;
   if (auto ok = checkDepthScale(values[6], name); !ok) return ok.error();
   camera.depthScale = static_cast<float>(values[6]);
   if (document->contains("fps")) {
@@ -160,18 +170,10 @@ Result<CameraDescription> parseIntelCameraJson(std::string_view text, const std:
     if (!value) return value.error();
     values[i] = *value;
   }
-  auto width = pixelCount(values[0], "dims[0]", where);
-  if (!width) return width.error();
-  auto height = pixelCount(values[1], "dims[1]", where);
-  if (!height) return height.error();
   // Their deprojection, x = (u - cx) / fx * z, is ours: pixel centres at integers.
-  camera.intrinsics = {*width,
-                       *height,
-                       static_cast<float>(values[2]),
-                       static_cast<float>(values[3]),
-                       static_cast<float>(values[4]),
-                       static_cast<float>(values[5])};
-  if (auto ok = checkIntrinsics(camera.intrinsics, where); !ok) return ok.error();
+  auto intrinsics = intrinsicsFrom(values, "dims[0]", "dims[1]", where);
+  if (!intrinsics) return intrinsics.error();
+  camera.intrinsics = *intrinsics;
   return camera;
 }
 

@@ -63,8 +63,12 @@ Shape relaxed() {
 void curl(Shape& s, int f) {
   setFinger(s, f, 85, 0, 100, 60);
 }
+// The thumb wrapped across the front of the curled fingers, its pad on the middle finger.
+// Until session 7 it was tucked deeper (CMC 45 flexion, no abduction, MCP 40, IP 50): its
+// proximal phalanx ran 14 mm into the middle finger's distal one, a pose no hand, and no
+// tracker whose bones collide, can take (tests/synth: Clips.BonesOfTheDefaultHandDoNotOverlap).
 void thumbTucked(Shape& s) {
-  setThumb(s, digit(45, 0, 10), 40, 50);
+  setThumb(s, digit(25, 35, -20), 60, 80);
 }
 Shape fist() {
   Shape s;

@@ -42,9 +42,9 @@ TEST(Clips, EveryClipStaysWithinTheJointLimits) {
 // inside each other bone is the measure.
 TEST(Clips, BonesOfTheDefaultHandDoNotOverlap) {
   constexpr float kSoftTissueM = 0.0025f;
-  for (const model::HandDimensions size : {model::HandDimensions{0.165f, 0.075f},
-                                           model::HandDimensions{0.19f, 0.085f},
-                                           model::HandDimensions{0.215f, 0.095f}}) {
+  for (const model::HandDimensions size :
+       {model::HandDimensions{0.165f, 0.075f}, model::HandDimensions{0.19f, 0.085f},
+        model::HandDimensions{0.215f, 0.095f}}) {
     const model::ArticulatedModel hand = model::makeDefaultHand(size);
     const int n = hand.bodyCount();
     for (const ClipInfo& clip : clips()) {
@@ -64,7 +64,9 @@ TEST(Clips, BonesOfTheDefaultHandDoNotOverlap) {
             const auto& bb = hand.bodies()[static_cast<std::size_t>(b)];
             const Pose& pa = pose.bodies[static_cast<std::size_t>(a)];
             const Pose& pb = pose.bodies[static_cast<std::size_t>(b)];
-            const float apart = (pa.transform(ba.shape.centroid()) - pb.transform(bb.shape.centroid())).norm();
+            const float apart =
+                (pa.transform(ba.shape.centroid()) - pb.transform(bb.shape.centroid())).norm();
+            // Bounding spheres apart: no vertex can be inside.
             if (apart > ba.shape.boundingRadius() + bb.shape.boundingRadius()) continue;
             for (const Vec3& v : ba.shape.vertices()) {
               const float depth = -bb.shape.signedDistance(pb.inverseTransform(pa.transform(v)));

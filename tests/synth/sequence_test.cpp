@@ -50,8 +50,8 @@ TEST(Clips, BonesOfTheDefaultHandDoNotOverlap) {
     for (const ClipInfo& clip : clips()) {
       float deepest = 0.0f;
       std::string where;
-      for (int i = 0; i < 60; ++i) {
-        const float t = clip.duration * static_cast<float>(i) / 60.0f;
+      for (int i = 0; i < 40; ++i) {
+        const float t = clip.duration * static_cast<float>(i) / 40.0f;
         Result<std::vector<HandMotionSample>> samples = sampleClip(clip.name, hand, t);
         ASSERT_TRUE(samples.ok()) << samples.message();
         model::JointAngles angles = (*samples)[0].angles;

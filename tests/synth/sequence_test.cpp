@@ -36,6 +36,54 @@ TEST(Clips, EveryClipStaysWithinTheJointLimits) {
   }
 }
 
+// Ground truth the tracker's model can reach: no two bones of the default hand that collide
+// (not joined by a joint, not an ignored pair) overlap anywhere along any clip, at any hand
+// size, beyond the few millimetres soft tissue gives. The deepest hull vertex of each bone
+// inside each other bone is the measure.
+TEST(Clips, BonesOfTheDefaultHandDoNotOverlap) {
+  constexpr float kSoftTissueM = 0.0025f;
+  for (const model::HandDimensions size :
+       {model::HandDimensions{0.165f, 0.075f}, model::HandDimensions{0.19f, 0.085f},
+        model::HandDimensions{0.215f, 0.095f}}) {
+    const model::ArticulatedModel hand = model::makeDefaultHand(size);
+    const int n = hand.bodyCount();
+    for (const ClipInfo& clip : clips()) {
+      float deepest = 0.0f;
+      std::string where;
+      for (int i = 0; i < 40; ++i) {
+        const float t = clip.duration * static_cast<float>(i) / 40.0f;
+        Result<std::vector<HandMotionSample>> samples = sampleClip(clip.name, hand, t);
+        ASSERT_TRUE(samples.ok()) << samples.message();
+        model::JointAngles angles = (*samples)[0].angles;
+        angles.root = Pose::identity();
+        const model::ModelPose pose = model::forwardKinematics(hand, angles);
+        for (int a = 0; a < n; ++a) {
+          for (int b = 0; b < n; ++b) {
+            if (a == b || !hand.collides(a, b)) continue;
+            const auto& ba = hand.bodies()[static_cast<std::size_t>(a)];
+            const auto& bb = hand.bodies()[static_cast<std::size_t>(b)];
+            const Pose& pa = pose.bodies[static_cast<std::size_t>(a)];
+            const Pose& pb = pose.bodies[static_cast<std::size_t>(b)];
+            const float apart =
+                (pa.transform(ba.shape.centroid()) - pb.transform(bb.shape.centroid())).norm();
+            // Bounding spheres apart: no vertex can be inside.
+            if (apart > ba.shape.boundingRadius() + bb.shape.boundingRadius()) continue;
+            for (const Vec3& v : ba.shape.vertices()) {
+              const float depth = -bb.shape.signedDistance(pb.inverseTransform(pa.transform(v)));
+              if (depth > deepest) {
+                deepest = depth;
+                where = ba.name + " in " + bb.name + " at t = " + std::to_string(t);
+              }
+            }
+          }
+        }
+      }
+      EXPECT_LE(deepest, kSoftTissueM) << clip.name << " (hand length " << size.length
+                                       << "): " << 1000 * deepest << " mm, " << where;
+    }
+  }
+}
+
 // The clips are authored with abduction toward the thumb and flexion toward the palm: the
 // "spread" clip must move the index fingertip radially and "open-close" curl the fingers
 // toward the palm.

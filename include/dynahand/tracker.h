@@ -29,6 +29,10 @@ const char* strategyName(StrategyKind kind);  // "normal", "gross_motion", ...
 
 struct TrackerSettings {
   CloudConfig cloud;  // filtering, segmentation, voxel size, planes
+  // The segmentation ball (cloud.segmentation.handRadiusM) is set for the reference hand
+  // (model::HandDimensions{}, 0.19 m long); a longer model hand scales it up in proportion,
+  // or a hand whose nearest point is a fingertip loses its far fingertips to the ball.
+  bool scaleSegmentationToHand = true;
   int hands = 1;      // 1, or 2 (k-means split, paper "Tracking of Multiple Hands")
   // Threads the simulations of a frame run on (1: the caller's only). Results are the same
   // bits for any count: each simulation has its own copy of the hand.

@@ -75,6 +75,8 @@ class CandidateScorer {
         pool_(options.threads),
         settleFrames_(start ? 0 : options.acquisitionFrames) {
     options_.tracker.keepCandidates = false;
+    // Every candidate scored on the same segmented points, whatever its length.
+    options_.tracker.scaleSegmentationToHand = false;
   }
 
   // The given sizes, tracked in parallel.

@@ -68,12 +68,17 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
     return Error{"substeps and iterations must be >= 1"};
   if (settings.pointSubsets < 1 || settings.pointSubsets > 16)
     return Error{"pointSubsets must be 1..16"};
-  auto impl = std::make_unique<Impl>(rightHand, intrinsics, settings);
-  auto right = HandTracker::create(impl->right, model::Side::Right, settings, impl->pool.get());
+  TrackerSettings s = settings;
+  const float length = rightHand.metadata().referenceLength;
+  const float referenceLength = model::HandDimensions{}.length;
+  if (s.scaleSegmentationToHand && length > referenceLength)
+    s.cloud.segmentation.handRadiusM *= length / referenceLength;
+  auto impl = std::make_unique<Impl>(rightHand, intrinsics, s);
+  auto right = HandTracker::create(impl->right, model::Side::Right, s, impl->pool.get());
   if (!right) return right.error();
   impl->hands[0] = std::move(*right);
   if (settings.hands == 2) {
-    auto left = HandTracker::create(impl->left, model::Side::Left, settings, impl->pool.get());
+    auto left = HandTracker::create(impl->left, model::Side::Left, s, impl->pool.get());
     if (!left) return left.error();
     impl->hands[1] = std::move(*left);
   }

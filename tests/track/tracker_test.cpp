@@ -128,6 +128,24 @@ TEST(Tracker, EmptyFramesMeanLostNotACrash) {
   EXPECT_GT(back.hands[0].pointCount, 100);
 }
 
+// The segmentation ball grows with a longer hand model (so spread fingers of a large hand are
+// not cut off at its edge); a shorter one keeps the reference hand's ball.
+TEST(Tracker, SegmentationBallScalesWithALongerHand) {
+  const Intrinsics k{320, 240, 300, 300, 160, 120};
+  const float base = TrackerSettings{}.cloud.segmentation.handRadiusM;
+  auto radius = [&](float length, bool scale) {
+    TrackerSettings s;
+    s.scaleSegmentationToHand = scale;
+    auto tracker = Tracker::create(model::makeDefaultHand({length, 0.45f * length}), k, s);
+    EXPECT_TRUE(tracker.ok());
+    return (*tracker)->settings().cloud.segmentation.handRadiusM;
+  };
+  EXPECT_FLOAT_EQ(radius(0.19f, true), base);
+  EXPECT_FLOAT_EQ(radius(0.165f, true), base);
+  EXPECT_FLOAT_EQ(radius(0.228f, true), base * 1.2f);
+  EXPECT_FLOAT_EQ(radius(0.228f, false), base);
+}
+
 TEST(Tracker, RejectsBadSettings) {
   const auto hand = model::makeDefaultHand();
   TrackerSettings s;

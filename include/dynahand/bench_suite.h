@@ -22,10 +22,17 @@ struct HandSize {
   model::HandDimensions dimensions;
 };
 const std::vector<HandSize>& benchHandSizes();
+// Clips outside the default set that the ablations also run, each for the strategies it
+// targets: fast-translation (gross motion; the detector re-acquires), finger-flips (finger
+// flip), grasp-cylinder (grasp bias).
+const std::vector<std::string>& targetedAblationClips();
 
 struct SuiteItem {
   std::string variant = "all";  // "all", "no <strategy>" or "normal only"
   bool ablation = false;        // part of the ablation block (tof, medium, gt init)
+  // An ablation item on a clip a strategy targets beyond the default set (ablationClips()):
+  // in the per-clip ablation table only, not in the summary rows.
+  bool targeted = false;
   std::string clip, profile;
   HandSize size;
   bool autoInit = false;  // false: initialised from frame 0's ground truth

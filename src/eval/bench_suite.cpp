@@ -47,6 +47,12 @@ const std::vector<HandSize>& benchHandSizes() {
   return kSizes;
 }
 
+const std::vector<std::string>& targetedAblationClips() {
+  static const std::vector<std::string> kClips = {"fast-translation", "finger-flips",
+                                                  "grasp-cylinder"};
+  return kClips;
+}
+
 std::vector<SuiteItem> standardSuite(const SuiteOptions& options) {
   const int frames =
       options.frames > 0 ? options.frames : (options.quick ? kQuickFrames : kDefaultFrames);
@@ -81,13 +87,17 @@ std::vector<SuiteItem> standardSuite(const SuiteOptions& options) {
   const HandSize medium = benchHandSizes()[1];
   const std::size_t tofIndex = static_cast<std::size_t>(
       std::find(profiles.begin(), profiles.end(), "tof") - profiles.begin());
-  for (int variant = 0; variant <= track::kStrategyCount; ++variant) {
+  // variant -1: all strategies, the baseline for the targeted clips (for the default clips
+  // the standard tof / medium / gt items are the baseline).
+  for (int variant = -1; variant <= track::kStrategyCount; ++variant) {
     SuiteItem base;
     base.ablation = true;
     base.profile = "tof";
     base.size = medium;
     base.frames = frames;
-    if (variant < track::kStrategyCount) {
+    if (variant < 0) {
+      base.variant = "all";
+    } else if (variant < track::kStrategyCount) {
       base.variant =
           std::string("no ") + track::strategyName(static_cast<track::StrategyKind>(variant));
       base.tracker.strategies[static_cast<std::size_t>(variant)] = false;
@@ -96,11 +106,20 @@ std::vector<SuiteItem> standardSuite(const SuiteOptions& options) {
       base.tracker.strategies = {true, false, false, false, false};
     }
     const std::size_t mediumIndex = options.quick ? 0 : 1;
-    for (std::size_t c = 0; c < clipNames.size(); ++c) {
+    for (std::size_t c = 0; c < clipNames.size() && variant >= 0; ++c) {
       if (options.quick && c > 0) break;  // one clip is enough to exercise the block
       SuiteItem item = base;
       item.clip = clipNames[c];
       item.seed = 1 + c + 10 * tofIndex + 100 * mediumIndex;
+      items.push_back(item);
+    }
+    if (options.quick) continue;
+    const auto& targeted = targetedAblationClips();
+    for (std::size_t c = 0; c < targeted.size(); ++c) {
+      SuiteItem item = base;
+      item.targeted = true;
+      item.clip = targeted[c];
+      item.seed = 1 + clipNames.size() + c + 10 * tofIndex + 100 * mediumIndex;
       items.push_back(item);
     }
   }
@@ -200,7 +219,7 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
     if (isAblationBaseline(r.item)) add("ablation: all (= tof / medium / gt)", r);
   }
   for (const auto& r : results) {
-    if (r.item.ablation) add(rowLabel(r.item), r);
+    if (r.item.ablation && !r.item.targeted) add(rowLabel(r.item), r);
   }
   std::vector<SuiteRow> rows;
   for (const std::string& label : order) {

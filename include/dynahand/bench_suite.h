@@ -30,7 +30,8 @@ const std::vector<std::string>& targetedAblationClips();
 struct SuiteItem {
   std::string variant = "all";  // "all", "no <strategy>" or "normal only"
   bool ablation = false;        // part of the ablation block (tof, medium, gt init)
-  // An ablation item on a clip a strategy targets beyond the default set (ablationClips()):
+  // An ablation item on a clip a strategy targets beyond the default set
+  // (targetedAblationClips(), not synth::defaultClipSet()):
   // in the per-clip ablation table only, not in the summary rows.
   bool targeted = false;
   std::string clip, profile;

@@ -33,7 +33,7 @@ struct TrackerSettings {
   // (model::HandDimensions{}, 0.19 m long); a longer model hand scales it up in proportion,
   // or a hand whose nearest point is a fingertip loses its far fingertips to the ball.
   bool scaleSegmentationToHand = true;
-  int hands = 1;      // 1, or 2 (k-means split, paper "Tracking of Multiple Hands")
+  int hands = 1;  // 1, or 2 (k-means split, paper "Tracking of Multiple Hands")
   // Threads the simulations of a frame run on (1: the caller's only). Results are the same
   // bits for any count: each simulation has its own copy of the hand.
   int threads = 1;
@@ -136,6 +136,8 @@ class Tracker {
   // The cloud of the last frame (points, mask, planes), e.g. for pictures.
   const CloudFrame& lastCloud() const;
   const model::ArticulatedModel& model(model::Side side) const;
+  // The settings in use: as given, except the segmentation radius scaled to the model's hand
+  // length (see scaleSegmentationToHand).
   const TrackerSettings& settings() const;
 
  private:

@@ -13,6 +13,7 @@
 namespace dynahand::physics {
 namespace {
 constexpr int kSpread = 4;
+constexpr int kMinRowsToSplit = 32;  // fewer rows on one slot are never split
 }  // namespace
 
 void SurfaceBatches::reserve(int rows) {
@@ -25,7 +26,8 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
                            const std::vector<SolverBody>& bodies, int dummySlot) {
   slotCount_ = static_cast<int>(bodies.size());
   const int n = static_cast<int>(rows.size());
-  // Slots with more rows than a four-wide sweep has batches are split (see the header).
+  // Slots with more rows than a four-wide sweep has batches are split (see the header), but
+  // not small sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster.
   const int target = std::max(1, (n + 3) / 4);
   count_.assign(static_cast<std::size_t>(slotCount_), 0);
   for (const PreparedSurfaceRow& r : rows) ++count_[static_cast<std::size_t>(r.slot)];
@@ -33,7 +35,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   int copyCount = 0;
   for (int s = 0; s < slotCount_; ++s) {
     const int c = count_[static_cast<std::size_t>(s)];
-    if (c <= target) continue;
+    if (c <= target || c < kMinRowsToSplit) continue;
     const int copies = (c + target - 1) / target;
     splits_.push_back({s, copyCount, copies});
     copyCount += copies;
@@ -43,9 +45,9 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   // copy sees rows from all over the body).
   virtualSlot_.resize(static_cast<std::size_t>(n));
   {
-    std::vector<int>& turn = start_;  // scratch: rows seen so far per slot
+    std::vector<int>& turn = rowsSeen_;
     turn.assign(static_cast<std::size_t>(slotCount_), 0);
-    std::vector<int>& splitOf = slotsByCount_;  // scratch: split index per slot, -1 none
+    std::vector<int>& splitOf = splitOfSlot_;
     splitOf.assign(static_cast<std::size_t>(slotCount_), -1);
     for (std::size_t k = 0; k < splits_.size(); ++k)
       splitOf[static_cast<std::size_t>(splits_[k].slot)] = static_cast<int>(k);
@@ -111,9 +113,8 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   }
   int position = 0;
   auto copiesOf = [&](int slot) {
-    for (const Split& sp : splits_)
-      if (sp.slot == slot) return sp.copies;
-    return 1;
+    const int k = splitOfSlot_[static_cast<std::size_t>(slot)];
+    return k < 0 ? 1 : splits_[static_cast<std::size_t>(k)].copies;
   };
   auto deal = [&](int o) {
     const int i = order_[static_cast<std::size_t>(o)];

@@ -57,6 +57,8 @@ class SurfaceBatches {
   std::vector<int> order_, count_, start_, slotsByCount_;
   std::vector<int> virtualSlot_;  // (rows) the slot or copy a row is solved on
   std::vector<Split> splits_;
+  std::vector<int> splitOfSlot_;  // (slots) index into splits_, -1 when not split
+  std::vector<int> rowsSeen_;     // (slots) scratch while dealing rows to copies
   std::vector<SolverBody> copies_;
   int slotCount_ = 0;  // real solver slots; copies are numbered after them
 };

@@ -63,20 +63,16 @@ Shape relaxed() {
 void curl(Shape& s, int f) {
   setFinger(s, f, 85, 0, 100, 60);
 }
-// The thumb resting along the radial side of the curled index finger. Until session 7 it was
-// tucked across the fingers (CMC 45 flexion, no abduction, MCP 40, IP 50): its proximal
-// phalanx ran 14 mm into the middle finger's distal one, a pose no hand, and no tracker whose
-// bones collide, can take (tests/synth: Clips.BonesOfTheDefaultHandDoNotOverlap). Wrapped
-// across the front of the fingers instead (CMC 25/35/-20, MCP 60, IP 80: no overlap either),
-// structured-light `count` frames 30 and 54 segment only part of the hand
-// (CloudSynthClips.EveryClipStructuredLightFindsTheHand fails): a segmentation limit, open.
-void thumbTucked(Shape& s) {
+// The fist's thumb rests along the radial side of the curled index finger: tucked across
+// the fingers it ran into the middle finger's distal phalanx, a pose no hand and no tracker
+// whose bones collide can take (Clips.BonesOfTheDefaultHandDoNotOverlap).
+void thumbAlongIndex(Shape& s) {
   setThumb(s, digit(10, 20, -20), 30, 10);
 }
 Shape fist() {
   Shape s;
   for (int f = 0; f < 4; ++f) curl(s, f);
-  thumbTucked(s);
+  thumbAlongIndex(s);
   return s;
 }
 Shape spread() {

@@ -58,8 +58,12 @@ __attribute__((target("avx"))) float maxPlaneDistanceAvx(const float* nx, const 
   i = _mm256_min_ps(i, _mm256_permute2f128_ps(i, i, 1));
   i = _mm256_min_ps(i, _mm256_permute_ps(i, 0x4E));
   i = _mm256_min_ps(i, _mm256_permute_ps(i, 0xB1));
-  *face = static_cast<int>(_mm256_cvtss_f32(i));
-  return _mm256_cvtss_f32(m);
+  const int chosen = static_cast<int>(_mm256_cvtss_f32(i));
+  *face = chosen;
+  // The chosen plane's distance, by the lanes' arithmetic: the same bits as its lane, also
+  // where the maximum is a zero of either sign.
+  const auto c = static_cast<std::size_t>(chosen);
+  return (nx[c] * q.x() + ny[c] * q.y()) + nz[c] * q.z() - o[c];
 }
 
 // Bounding-sphere lower bounds max(0, |p - c_i| - r_i) for `blocks` blocks of eight bodies
@@ -78,8 +82,10 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
     const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(cx + o));
     const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(cy + o));
     const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(cz + o));
-    const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
-                                    _mm256_mul_ps(dz, dz));
+    // x^2 + (y^2 + z^2): Eigen's order for a 3-vector's squaredNorm, so the bounds are the
+    // scalar path's bits.
+    const __m256 d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx),
+                                    _mm256_add_ps(_mm256_mul_ps(dy, dy), _mm256_mul_ps(dz, dz)));
     const __m256 bound =
         _mm256_max_ps(_mm256_sub_ps(_mm256_sqrt_ps(d2), _mm256_loadu_ps(r + o)), zero);
     _mm256_storeu_ps(bounds + o, bound);
@@ -112,7 +118,7 @@ std::atomic<bool> wideScan{cpuHasAvx()};
 
 void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
                       std::span<const Pose> poses) {
-  assert(shapes.size() == poses.size() && shapes.size() <= 32);
+  assert(shapes.size() == poses.size() && shapes.size() <= kMaxBodies);
   shapes_.assign(shapes.begin(), shapes.end());
   poses_.assign(poses.begin(), poses.end());
   centroids_.resize(shapes.size());

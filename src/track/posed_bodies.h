@@ -56,9 +56,10 @@ class PosedBodies {
   // does not depend on the hint except on exact ties.
   SurfaceHit nearestPlanar(const Vec3& p, BodyMask mask = kAllBodies, int hint = -1) const;
 
-  // The face-plane scans run eight planes per AVX instruction when the CPU has AVX (on by
-  // default there), else four per SSE instruction; both give identical bits. false forces
-  // the SSE path (for tests comparing the two); returns whether the wide path is now in use.
+  // The face-plane scans (and the exact query's bounding-sphere bounds) run eight at a time
+  // with AVX when the CPU has it (on by default there), else four per SSE instruction or
+  // scalar; both give identical bits. false forces the narrow path (for tests comparing the
+  // two); returns whether the wide path is now in use.
   static bool useWidePlaneScan(bool enabled);
 
  private:

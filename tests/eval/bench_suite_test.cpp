@@ -24,7 +24,7 @@ TEST(BenchSuite, AblationsAlsoRunTheClipsTheStrategiesTarget) {
     ++ablations;
     const auto& targeted = targetedAblationClips();
     const auto t = std::find(targeted.begin(), targeted.end(), item.clip);
-    EXPECT_EQ(item.targeted, t != targeted.end()) << item.clip;
+    ASSERT_EQ(item.targeted, t != targeted.end()) << item.clip;
     if (item.targeted)
       variantsOfTargeted[t - targeted.begin()].insert(item.variant);
     else

@@ -226,7 +226,9 @@ TEST(SurfaceRows, MajorityOverpowersOutliers) {
 
 // A body holding every surface row is solved over four copies of itself (mass splitting);
 // the same rows with three more bodies holding as many rows each are solved on the body
-// itself. Both fits agree: splitting changes how a sweep converges, not the answer.
+// itself. Both fits agree: splitting changes how a sweep converges, not the answer. (That
+// each copy carries its share of the mass shows in AccumulatedImpulseNeverExceedsCap: its 40
+// saturated rows on one box are split, and the box must travel the full capped momentum.)
 TEST(SurfaceRows, BodyHoldingEveryRowFitsAsWhenItHoldsAQuarter) {
   const Vec3 shift(0.008f, -0.004f, 0.005f);
   const Quat turn(Eigen::AngleAxisf(0.1f, Vec3(0.3f, 1.0f, 0.2f).normalized()));
@@ -250,10 +252,12 @@ TEST(SurfaceRows, BodyHoldingEveryRowFitsAsWhenItHoldsAQuarter) {
         const Pose target{Vec3(0.2f * static_cast<float>(b), 0, 0) + shift, turn};
         for (std::size_t f = 0; f < s.faces().size(); ++f) {
           for (const int v : s.faces()[f].vertices) {
-            const Vec3 anchor = 0.8f * s.vertices()[static_cast<std::size_t>(v)];
-            const Vec3 local = anchor + 0.01f * s.faces()[f].normal;
-            w.rows().addSurface(b, local, w.pose(b).rotate(s.faces()[f].normal),
-                                target.transform(local), 0.05f);
+            for (const float inward : {0.8f, 0.5f}) {  // 48 rows per box: a lone box is split
+              const Vec3 anchor = inward * s.vertices()[static_cast<std::size_t>(v)];
+              const Vec3 local = anchor + 0.01f * s.faces()[f].normal;
+              w.rows().addSurface(b, local, w.pose(b).rotate(s.faces()[f].normal),
+                                  target.transform(local), 0.05f);
+            }
           }
         }
       }

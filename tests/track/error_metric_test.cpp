@@ -3,6 +3,8 @@
 // tried for every point, occlusion by direct pixel lookup.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
 #include <random>
 
 #include "track/error_metric.h"
@@ -93,13 +95,15 @@ TEST(ErrorMetric, MatchesBruteForceOnRandomPoses) {
         err);
 
     std::vector<float> fit(s.shapes.size(), 0.0f);
-    for (const Vec3& p : s.points) {
+    for (std::size_t k = 0; k < s.points.size(); ++k) {
+      const Vec3& p = s.points[k];
       int bestBody = -1;
       float best = 1e9f;
       for (std::size_t i = 0; i < s.shapes.size(); ++i) {
         const float d = bruteSurfaceDistance(s.shapes[i], s.poses[i], p);
         if (d < best) best = d, bestBody = static_cast<int>(i);
       }
+      EXPECT_NEAR(err.pointDistance[k], best, 1e-5f) << "seed " << seed << " point " << k;
       fit[static_cast<std::size_t>(bestBody)] =
           std::max(fit[static_cast<std::size_t>(bestBody)], best);
     }
@@ -151,6 +155,10 @@ TEST(ErrorMetric, BoundedVersionIsExactUnderTheBoundAndALowerBoundAbove) {
     EXPECT_FALSE(computeErrorBounded(bodies, s.points, isFree, bound, stopped, {}, reversed));
     EXPECT_GT(stopped.total, bound);
     EXPECT_LE(stopped.total, full.total);
+    // It stopped early: points after the stop were never measured.
+    EXPECT_GT(std::count(stopped.pointDistance.begin(), stopped.pointDistance.end(),
+                         std::numeric_limits<float>::infinity()),
+              0);
   }
 }
 

@@ -94,6 +94,8 @@ TEST(Tracker, IsDeterministicForAnyThreadCount) {
         const HandResult& hand = (*tracker)->track(frame.depth).hands[0];
         for (const Pose& p : hand.pose.bodies) winner.add(p);
         winner.add(hand.error);
+        winner.add(hand.quality.dataNearModel);
+        winner.add(hand.quality.modelOnHand);
         for (const Candidate& c : hand.candidates) {
           h.add(c.error);
           for (const Pose& p : c.pose.bodies) h.add(p);

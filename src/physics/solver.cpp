@@ -205,6 +205,14 @@ class FlushDenormals {
 }  // namespace
 
 namespace {
+// A body point given relative to the centre of mass (body axes): its world position, and its
+// arm from the centre of the solver slot moving it (the body's, or its weld group's).
+Vec3 armOf(const World::Impl& m, const WorldState& s, std::size_t body, const Vec3& comLocal,
+           Vec3* world) {
+  *world = s.position[body] + s.orientation[body] * comLocal;
+  return *world - m.slotPosition[static_cast<std::size_t>(m.slotOf(s, static_cast<BodyId>(body)))];
+}
+
 // The tracker's thousand surface rows, prepared for the batches. A function of its own: inside
 // World::step (one very large function) the compiler stopped inlining the quaternion rotation
 // and inertia products per row; here they inline, with the same arithmetic.
@@ -218,9 +226,8 @@ namespace {
     assert(body < m.bodies.size() && "surface row: bad body");
     const int slot = m.slotOf(s, static_cast<BodyId>(body));
     const SolverBody& b = m.solverBodies[static_cast<std::size_t>(slot)];
-    const Vec3 world =
-        s.position[body] + s.orientation[body] * Vec3(rows.anchor[i] - m.bodies[body].centroid);
-    const Vec3 r = world - m.slotPosition[static_cast<std::size_t>(slot)];
+    Vec3 world;
+    const Vec3 r = armOf(m, s, body, rows.anchor[i] - m.bodies[body].centroid, &world);
     const Vec3& nrm = rows.normal[i];
     const Vec3 ang = r.cross(nrm);
     const Vec3 invIAng = applyInvInertia(b, ang);
@@ -300,10 +307,6 @@ void World::step(float h) {
   m.rows.clear();
   RowBuilder rb{m};
   auto slotOf = [&](std::size_t body) { return m.slotOf(s, static_cast<BodyId>(body)); };
-  auto armOf = [&](std::size_t body, const Vec3& comLocal, Vec3* world) {
-    *world = s.position[body] + s.orientation[body] * comLocal;
-    return Vec3(*world - m.slotPosition[static_cast<std::size_t>(slotOf(body))]);
-  };
 
   // Body drives: 3 linear + 3 angular motor rows against the static dummy.
   for (std::size_t i = 0; i < n; ++i) {
@@ -459,8 +462,8 @@ void World::step(float h) {
     if (sa == sb) continue;
     float* store = &s.jointImpulse[ji * kJointImpulses];
     Vec3 worldA, worldB;
-    const Vec3 rA = armOf(pa, j.comAnchorParent, &worldA);
-    const Vec3 rB = armOf(pb, j.comAnchorChild, &worldB);
+    const Vec3 rA = armOf(m, s, pa, j.comAnchorParent, &worldA);
+    const Vec3 rB = armOf(m, s, pb, j.comAnchorChild, &worldB);
     const Vec3 c = worldB - worldA;
     m.jointPositions.push_back({sa, sb,
                                 m.slotOrientation[static_cast<std::size_t>(sa)].conjugate() * rA,

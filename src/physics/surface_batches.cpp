@@ -121,8 +121,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     const PreparedSurfaceRow& r = rows[static_cast<std::size_t>(i)];
     Batch& b = batches_[static_cast<std::size_t>(position % batchCount)];
     const int k = position / batchCount;
-    const int solveSlot = virtualSlot_[static_cast<std::size_t>(i)];
-    b.slot[k] = solveSlot;
+    b.slot[k] = virtualSlot_[static_cast<std::size_t>(i)];
     b.row[k] = i;
     b.nx[k] = r.normal.x();
     b.ny[k] = r.normal.y();
@@ -130,25 +129,17 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     b.ax[k] = r.ang.x();
     b.ay[k] = r.ang.y();
     b.az[k] = r.ang.z();
-    const float invMass = bodies[static_cast<std::size_t>(r.slot)].invMass;
-    if (solveSlot == r.slot) {
-      b.ix[k] = r.invIAng.x();
-      b.iy[k] = r.invIAng.y();
-      b.iz[k] = r.invIAng.z();
-      b.effMass[k] = r.effMass;
-      b.ux[k] = r.normal.x() * invMass;
-      b.uy[k] = r.normal.y() * invMass;
-      b.uz[k] = r.normal.z() * invMass;
-    } else {  // a copy holding 1/copies of the mass: inverse mass and inertia times copies
-      const auto copies = static_cast<float>(copiesOf(r.slot));
-      b.ix[k] = r.invIAng.x() * copies;
-      b.iy[k] = r.invIAng.y() * copies;
-      b.iz[k] = r.invIAng.z() * copies;
-      b.effMass[k] = r.effMass / copies;
-      b.ux[k] = r.normal.x() * (invMass * copies);
-      b.uy[k] = r.normal.y() * (invMass * copies);
-      b.uz[k] = r.normal.z() * (invMass * copies);
-    }
+    // A copy holds 1/copies of its slot's mass: inverse mass and inertia times copies (exactly
+    // the slot's own values for an unsplit slot, copies = 1).
+    const auto copies = static_cast<float>(copiesOf(r.slot));
+    const float invMass = bodies[static_cast<std::size_t>(r.slot)].invMass * copies;
+    b.ix[k] = r.invIAng.x() * copies;
+    b.iy[k] = r.invIAng.y() * copies;
+    b.iz[k] = r.invIAng.z() * copies;
+    b.effMass[k] = r.effMass / copies;
+    b.ux[k] = r.normal.x() * invMass;
+    b.uy[k] = r.normal.y() * invMass;
+    b.uz[k] = r.normal.z() * invMass;
     b.bias[k] = r.bias;
     b.relaxBias[k] = r.relaxBias;
     b.lower[k] = r.lower;

@@ -3,7 +3,8 @@
 // Within a batch the rows touch different bodies, so solving them together is the same as
 // solving them one after another: still projected Gauss-Seidel, in batch order. Rows are
 // dealt into batches so that a slot's rows never share one. A slot holding more than a
-// quarter of the rows (a welded hand: all of them) would make batches of its own, three lanes
+// quarter of the rows, and at least 32 (a welded hand: all of them), would make batches of
+// its own, three lanes
 // idle; its rows are instead spread over several copies of the slot, each with that share of
 // its mass, whose velocities are averaged after every sweep (mass splitting, Tonge et al.
 // 2012), so the sweep stays four rows wide.

@@ -84,14 +84,14 @@ void HandTracker::reset() {
   badFrames_ = 0;
 }
 
-float HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
-                            PosedBodies& posed, ErrorBreakdown& error) {
+bool HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
+                           PosedBodies& posed, ErrorBreakdown& error, float abortAbove,
+                           std::span<const int> order) {
   simulator.pose(rig, posed);
   const CloudFrame* cloud = frame.cloud;
-  computeError(
+  return computeErrorBounded(
       posed, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); },
-      error, simulator.lastNearestBodies());
-  return error.total;
+      abortAbove, error, simulator.lastNearestBodies(), order);
 }
 
 void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
@@ -100,20 +100,13 @@ void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
   // best so far, visiting first the points farthest from the first candidate's model (a
   // losing pose is usually off on the same points). The winner is measured in full, so its
   // error and breakdown are exactly computeError's.
-  const CloudFrame* cloud = frame.cloud;
-  const FreeSpaceTest isFree = [cloud](const Vec3& p) {
-    return cloud != nullptr && cloud->isFree(p);
-  };
   float best = std::numeric_limits<float>::infinity();
   metricOrder_.clear();
   for (auto& lanePtr : lanes_) {
     Lane& lane = *lanePtr;
     if (!lane.candidate.ran) continue;
-    lane.simulator.pose(lane.rig, lane.posed);
-    if (computeErrorBounded(lane.posed, frame.points, isFree, best, lane.error,
-                            lane.simulator.lastNearestBodies(), metricOrder_)) {
+    if (evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error, best, metricOrder_))
       best = std::min(best, lane.error.total);
-    }
     lane.candidate.error = lane.error.total;
     if (metricOrder_.empty()) {
       const auto& distance = lane.error.pointDistance;
@@ -132,7 +125,8 @@ void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
 }
 
 float HandTracker::evaluate(const HandFrame& frame) {
-  return evaluate(simulator_, rig_, frame, posed_, error_);
+  evaluate(simulator_, rig_, frame, posed_, error_);
+  return error_.total;
 }
 
 void HandTracker::track(const HandFrame& frame, HandResult& out) {
@@ -194,7 +188,8 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     candidate.error = 0.0f;
     candidate.ran = lane.strategy->run(context);
     if (!candidate.ran || !settings_.keepCandidates) return;
-    candidate.error = evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error);
+    evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error);
+    candidate.error = lane.error.total;
     lane.rig.readPose(candidate.pose);
   };
   const int count = static_cast<int>(lanes_.size());

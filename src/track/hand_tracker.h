@@ -2,6 +2,7 @@
 // acquisition from scratch and the tracked/lost state.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -39,9 +40,13 @@ class HandTracker {
  private:
   HandTracker(const model::ArticulatedModel& model, model::Side side,
               const TrackerSettings& settings, HandRig rig, WorkerPool* pool);
-  // The paper's error of the rig's current state (writes posed and error).
-  static float evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
-                        PosedBodies& posed, ErrorBreakdown& error);
+  // The paper's error of the rig's current state (writes posed and error), given up once it
+  // is sure to exceed abortAbove (see computeErrorBounded; false then). order: the points'
+  // visiting order, optional.
+  static bool evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
+                       PosedBodies& posed, ErrorBreakdown& error,
+                       float abortAbove = std::numeric_limits<float>::infinity(),
+                       std::span<const int> order = {});
   float evaluate(const HandFrame& frame);  // of rig_, into error_
   // Each lane's candidate.error and lane.error, stopping a candidate's metric once it cannot
   // win (see computeErrorBounded): its error is then only a lower bound.

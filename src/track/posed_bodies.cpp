@@ -20,6 +20,20 @@ namespace dynahand::track {
 
 namespace {
 
+// The largest of the eight lanes' maxima; ties go to the lower face index.
+float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
+  float result = best[0];
+  int which = index[0];
+  for (int k = 1; k < 8; ++k) {
+    if (best[k] > result || (best[k] == result && index[k] < which)) {
+      result = best[k];
+      which = index[k];
+    }
+  }
+  *face = which;
+  return result;
+}
+
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
 // The same eight lanes as the SSE path in one 256-bit register (half the loop trips). Only
 // AVX (no FMA): each lane's multiply-add sequence is unchanged, so both paths give identical
@@ -121,8 +135,6 @@ void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
   assert(shapes.size() == poses.size() && shapes.size() <= kMaxBodies);
   shapes_.assign(shapes.begin(), shapes.end());
   poses_.assign(poses.begin(), poses.end());
-  centroids_.resize(shapes.size());
-  radii_.resize(shapes.size());
   if (tableShapes_ != shapes_) {  // plane tables are rebuilt only when the shapes change
     tableShapes_ = shapes_;
     planes_.resize(shapes.size());
@@ -142,19 +154,17 @@ void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
       }
     }
   }
-  for (std::size_t i = 0; i < kMaxBodies; ++i) {  // far spheres pad the SoA copy
-    sphereX_[i] = sphereY_[i] = sphereZ_[i] = 1e15f;
-    sphereR_[i] = 0.0f;
-  }
-  for (std::size_t i = 0; i < shapes.size(); ++i) {
-    radii_[i] = shapes_[i]->boundingRadius();
-    sphereR_[i] = radii_[i];
-    setCentroid(i, poses_[i].transform(shapes_[i]->centroid()));
+  for (std::size_t i = 0; i < kMaxBodies; ++i) {  // far spheres pad past the last body
+    const bool body = i < shapes.size();
+    sphereR_[i] = body ? shapes_[i]->boundingRadius() : 0.0f;
+    if (body)
+      setCentroid(i, poses_[i].transform(shapes_[i]->centroid()));
+    else
+      sphereX_[i] = sphereY_[i] = sphereZ_[i] = 1e15f;
   }
 }
 
 void PosedBodies::setCentroid(std::size_t body, const Vec3& centroid) {
-  centroids_[body] = centroid;
   sphereX_[body] = centroid.x();
   sphereY_[body] = centroid.y();
   sphereZ_[body] = centroid.z();
@@ -165,22 +175,6 @@ void PosedBodies::setPose(int body, const Pose& pose) {
   poses_[i] = pose;
   setCentroid(i, pose.transform(shapes_[i]->centroid()));
 }
-
-namespace {
-// The largest of the eight lanes' maxima; ties go to the lower face index.
-float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
-  float result = best[0];
-  int which = index[0];
-  for (int k = 1; k < 8; ++k) {
-    if (best[k] > result || (best[k] == result && index[k] < which)) {
-      result = best[k];
-      which = index[k];
-    }
-  }
-  *face = which;
-  return result;
-}
-}  // namespace
 
 bool PosedBodies::useWidePlaneScan(bool enabled) {
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
@@ -273,7 +267,7 @@ SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) co
     if (sd > best.distance) return;
     // Outside, the bounding-sphere bound is also a lower bound on the exact distance; taking
     // the larger keeps the sphere culling below consistent (the answer is order-free).
-    const float d = sd < 0.0f ? -sd : std::max(sd, (p - centroids_[bi]).norm() - radii_[bi]);
+    const float d = sd < 0.0f ? -sd : std::max(sd, (p - worldCentroid(i)).norm() - sphereR_[bi]);
     if (d < best.distance || (d == best.distance && i < best.body)) {
       const auto& f = shapes_[bi]->faces()[static_cast<std::size_t>(face)];
       best = {i, face, d, sd, local - f.normal * sd};
@@ -284,8 +278,8 @@ SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) co
   if (hint >= 0 && hint < size() && (mask >> hint & 1u)) test(hint);
   for (int i = 0; i < size(); ++i) {
     if (!(mask >> i & 1u) || i == hint) continue;
-    const float reach = best.distance + radii_[static_cast<std::size_t>(i)];
-    if ((p - centroids_[static_cast<std::size_t>(i)]).squaredNorm() >= reach * reach) continue;
+    const float reach = best.distance + sphereR_[static_cast<std::size_t>(i)];
+    if ((p - worldCentroid(i)).squaredNorm() >= reach * reach) continue;
     test(i);
   }
   return best;
@@ -306,7 +300,7 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {
     for (int i = 0; i < size(); ++i) {
       if (!(mask >> i & 1u)) continue;
       const auto bi = static_cast<std::size_t>(i);
-      bounds[bi] = std::max(0.0f, (p - centroids_[bi]).norm() - radii_[bi]);
+      bounds[bi] = std::max(0.0f, (p - worldCentroid(i)).norm() - sphereR_[bi]);
       if (first < 0 || bounds[bi] < bounds[static_cast<std::size_t>(first)]) first = i;
     }
   SurfaceHit best;

@@ -37,7 +37,10 @@ class PosedBodies {
     return *shapes_[static_cast<std::size_t>(body)];
   }
   const Pose& pose(int body) const { return poses_[static_cast<std::size_t>(body)]; }
-  Vec3 worldCentroid(int body) const { return centroids_[static_cast<std::size_t>(body)]; }
+  Vec3 worldCentroid(int body) const {
+    const auto i = static_cast<std::size_t>(body);
+    return {sphereX_[i], sphereY_[i], sphereZ_[i]};
+  }
 
   // The body whose surface is nearest to p (world), among the bodies in mask. Exact:
   // the body with the smallest bounding-sphere lower bound is tried first, then every
@@ -79,10 +82,8 @@ class PosedBodies {
   static constexpr std::size_t kMaxBodies = 32;  // BodyMask bits
   void setCentroid(std::size_t body, const Vec3& centroid);
 
-  std::vector<Vec3> centroids_;  // world centroid of each body
-  std::vector<float> radii_;     // bounding radius about the centroid
-  // The bounding spheres again as SoA (centres, radii), padded with far spheres, for
-  // eight-wide bounds.
+  // Each body's bounding sphere: world centroid and radius about it, as SoA for eight-wide
+  // bounds, padded past the last body with far spheres.
   std::array<float, kMaxBodies> sphereX_{}, sphereY_{}, sphereZ_{}, sphereR_{};
 };
 

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -238,8 +239,12 @@ class World {
   void reserveRows(int maxRows);
   // A boundary plane (unit normal, n·x >= offset is the allowed side) for body b: adds a
   // push-only row (impulse <= cap) on every hull vertex within margin (m) of the plane at the
-  // current pose; nothing when the bounding sphere is farther than margin.
-  void addBoundary(BodyId b, const Vec3& normal, float offset, float cap, float margin = 0.01f);
+  // current pose and within band (m) of the body's deepest vertex; nothing when the bounding
+  // sphere is farther than margin. A vertex more than band behind the deepest one only
+  // reaches the plane after the body turns by about band / its width, which one step does
+  // not do: its row would cost a solver row every sweep and never act.
+  void addBoundary(BodyId b, const Vec3& normal, float offset, float cap, float margin = 0.01f,
+                   float band = std::numeric_limits<float>::infinity());
 
   void step(float dt);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 
 #include "physics/world_impl.h"
 
@@ -359,7 +360,8 @@ void World::reserveRows(int maxRows) {
   impl_->surfaceBatches.reserve(maxRows);
 }
 
-void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, float margin) {
+void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, float margin,
+                        float band) {
   assert(std::abs(normal.squaredNorm() - 1.0f) < 1e-3f && std::isfinite(offset) && cap >= 0.0f);
   const auto i = static_cast<std::size_t>(b);
   const BodyConfig& c = impl_->bodies[i];
@@ -373,11 +375,18 @@ void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, f
   const Vec3 localNormal = p.q.conjugate() * normal;
   const float originDist = normal.dot(p.p) - offset;
   constexpr float kRoundingSlack = 1e-4f;  // m, far above float rounding at hand scale
-  for (const Vec3& v : shapes_[static_cast<std::size_t>(c.shape)].vertices()) {
-    if (localNormal.dot(v) + originDist > margin + kRoundingSlack) continue;
+  const auto& vertices = shapes_[static_cast<std::size_t>(c.shape)].vertices();
+  float reach = margin;  // rows for vertices at most this far from the plane
+  if (band < margin) {
+    float deepest = std::numeric_limits<float>::infinity();
+    for (const Vec3& v : vertices) deepest = std::min(deepest, localNormal.dot(v));
+    reach = std::min(margin, deepest + originDist + band);
+  }
+  for (const Vec3& v : vertices) {
+    if (localNormal.dot(v) + originDist > reach + kRoundingSlack) continue;
     const Vec3 world = p.transform(v);
     const float dist = normal.dot(world) - offset;
-    if (dist > margin) continue;
+    if (dist > reach) continue;
     rows_.body.push_back(b);
     rows_.anchor.push_back(v);
     rows_.normal.push_back(normal);

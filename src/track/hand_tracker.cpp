@@ -28,6 +28,7 @@ SimulationSettings simulationSettings(const TrackerSettings& s) {
   sim.stepDt = s.stepDt;
   sim.pullForce = s.pullForce;
   sim.boundaryForce = s.boundaryForce;
+  sim.boundaryBand = s.boundaryBand;
   sim.silhouetteForce = s.silhouetteForce;
   return sim;
 }
@@ -53,6 +54,11 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
       settings_(settings),
       rig_(std::move(rig)),
       simulator_(simulationSettings(settings)),
+      acquisitionSimulator_([&settings] {
+        SimulationSettings every = simulationSettings(settings);
+        every.pointSubsets = 1;
+        return every;
+      }()),
       pool_(pool) {
   // Room for every row a frame can make: points + labels + boundary rows.
   const int rows = settings_.cloud.maxVoxels + 64 + 17 * settings_.cloud.planes.planeCount;
@@ -260,7 +266,7 @@ model::ModelPose HandTracker::canonicalPose(const HandFrame& frame, const Vec2& 
 
 void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   auto& world = rig_.world();
-  simulator_.beginFrame();
+  acquisitionSimulator_.beginFrame();
   Vec2 axis(0.0f, -1.0f);
   if (frame.cloud != nullptr && frame.cloud->segment.armDirectionImage.norm() > 0.5f) {
     axis = -frame.cloud->segment.armDirectionImage.normalized();
@@ -293,15 +299,16 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
             {frame.detection->tips[static_cast<std::size_t>(f)], BodyMask{1} << tip, 20.0f});
       }
       input.labelled = labels;
-      simulator_.run(rig_, input, steps / 2);
+      acquisitionSimulator_.run(rig_, input, steps / 2);
       input.labelled = {};
       steps -= steps / 2;
     }
-    simulator_.run(rig_, input, steps);
+    acquisitionSimulator_.run(rig_, input, steps);
     Candidate candidate;
     candidate.kind = s.labelled ? StrategyKind::FeatureDetection : StrategyKind::Normal;
     candidate.ran = true;
-    candidate.error = evaluate(frame);
+    evaluate(acquisitionSimulator_, rig_, frame, posed_, error_);
+    candidate.error = error_.total;
     if (candidate.error < bestError) {
       bestError = candidate.error;
       world.saveState(best_);

@@ -65,7 +65,10 @@ class HandTracker {
   model::Side side_;
   TrackerSettings settings_;
   HandRig rig_;
-  Simulator simulator_;  // acquisition, and the frame-start mapping the lanes share
+  Simulator simulator_;  // the frame-start mapping the lanes share
+  // Acquisition moves the hand from a canonical pose, far from the data: every point pulls
+  // in every step (pointSubsets 1), as a frame's few steps from the last pose need not.
+  Simulator acquisitionSimulator_;
   // One simulation strategy with everything it writes to while it runs.
   struct Lane {
     HandRig rig;

@@ -151,7 +151,8 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
       // The forearm leaves the segmented region: its unobserved part lies outside the
       // planes, which would turn it to point along the view ray (70 degrees off).
       if (b == rig.anatomy().forearm) continue;
-      world.addBoundary(b, -plane.normal, 0.0f, boundaryCap, settings_.boundaryMargin);
+      world.addBoundary(b, -plane.normal, 0.0f, boundaryCap, settings_.boundaryMargin,
+                        settings_.boundaryBand);
     }
   }
 }

@@ -23,6 +23,10 @@ struct SimulationSettings {
   float pullForce = 600.0f;
   float boundaryForce = 200.0f;  // cap per boundary row (N), times stepDt
   float boundaryMargin = 0.02f;  // planes farther than this from a body add no row (m)
+  // Of a body's hull vertices within the margin, only those within this band of its deepest
+  // one get a row (m; see World::addBoundary): a finger lying along a plane keeps its near
+  // edge, not its far side too.
+  float boundaryBand = 0.005f;
   // Points farther than this from every body make no row: they belong to something else.
   float maxAttachDistance = 0.06f;
   // Each substep maps and pulls on one of this many interleaved subsets of the sample

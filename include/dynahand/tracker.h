@@ -40,8 +40,10 @@ struct TrackerSettings {
   // Strategies to run, by StrategyKind (ablations switch some off).
   std::array<bool, kStrategyCount> strategies = {true, true, true, true, true};
   // Physics steps per frame per simulation (gross motion and finger flip run twice this,
-  // the detector this plus one). 3 tracks the same within noise at 1.4x the cost.
-  int substeps = 2;
+  // the detector this plus one). 2 costs 30 % less, but fast motion and finger flips need
+  // the third step (docs/tracker.md: fast-translation 25 -> 36 mm, finger-flips 8 -> 12 mm,
+  // the large hand 95.9 -> 94.1 % of frames within 30 mm).
+  int substeps = 3;
   // Each physics step pulls on one of this many interleaved subsets of the sample points,
   // in turn (1 = all points every step): 2 costs 20 % less and tracks as well (3: another
   // 10-15 % less, as accurate on the synthetic clips, but the playground's dial slips).

@@ -1,7 +1,9 @@
 // Constraint rows: limits, drives, cones, the tracker's surface / line-of-sight / boundary rows.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "dynahand/physics_world.h"
@@ -317,6 +319,45 @@ TEST(BoundaryPlane, KeepsExtremePointOnAllowedSide) {
     for (const Vec3& v : w.bodyShape(b).vertices()) {
       worst = std::max(worst, w.pose(b).transform(v).y() - 0.05f);
     }
+  }
+  EXPECT_LT(worst, 1e-3f);
+}
+
+// A 4 cm box tilted towards a plane: the margin takes in vertices up to 2 cm from it, the
+// band only those within 5 mm of the deepest, and the box is still kept out while spinning.
+TEST(BoundaryPlane, BandKeepsOnlyTheVerticesNearTheDeepest) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  // Turned 0.35 rad about z: vertex edges 4 mm and 18 mm from the plane.
+  w.setPose(b, Pose{Vec3(0, 0.02f, 0), Quat(Eigen::AngleAxisf(0.35f, Vec3::UnitZ()))});
+  const Vec3 n(0, -1, 0);  // allowed side: y <= 0.05
+  const float offset = -0.05f, margin = 0.02f, band = 0.005f;
+  auto gap = [&](const Vec3& anchor) { return n.dot(w.pose(b).transform(anchor)) - offset; };
+  float deepest = std::numeric_limits<float>::infinity();
+  int withinMargin = 0, withinBand = 0;
+  for (const Vec3& v : w.bodyShape(b).vertices()) {
+    deepest = std::min(deepest, gap(v));
+  }
+  for (const Vec3& v : w.bodyShape(b).vertices()) {
+    withinMargin += gap(v) <= margin ? 1 : 0;
+    withinBand += gap(v) <= std::min(margin, deepest + band) ? 1 : 0;
+  }
+  ASSERT_GT(withinMargin, withinBand) << "the pose must put some vertices outside the band";
+  ASSERT_GE(withinBand, 1);
+  w.addBoundary(b, n, offset, 1.0f, margin);
+  EXPECT_EQ(static_cast<int>(w.rows().body.size()), withinMargin);
+  w.rows().clear();
+  w.addBoundary(b, n, offset, 1.0f, margin, band);
+  ASSERT_EQ(static_cast<int>(w.rows().body.size()), withinBand);
+  for (const Vec3& anchor : w.rows().anchor) EXPECT_LE(gap(anchor), deepest + band + 1e-6f);
+
+  w.setVelocity(b, Vec3(0, 0.5f, 0), Vec3(0, 0, 3.0f));  // heading into the plane, spinning
+  float worst = 0.0f;
+  for (int step = 0; step < 120; ++step) {
+    w.rows().clear();
+    w.addBoundary(b, n, offset, 1.0f, margin, band);
+    w.step(kDt);
+    for (const Vec3& v : w.bodyShape(b).vertices()) worst = std::max(worst, gap(v) * -1.0f);
   }
   EXPECT_LT(worst, 1e-3f);
 }

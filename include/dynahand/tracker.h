@@ -48,11 +48,11 @@ struct TrackerSettings {
   // in turn (1 = all points every step): 2 costs 20 % less and tracks as well (3: another
   // 10-15 % less, as accurate on the synthetic clips, but the playground's dial slips).
   int pointSubsets = 2;
-  float stepDt = 1.0f / 60.0f;     // s per physics step
-  int iterations = 16;             // Gauss-Seidel sweeps per step
-  int relaxIterations = 4;         // bias-removal sweeps per step
-  float pullForce = 4000.0f;       // total surface-row force (N), split over the points
-  float boundaryForce = 200.0f;    // per boundary row (N)
+  float stepDt = 1.0f / 60.0f;   // s per physics step
+  int iterations = 16;           // Gauss-Seidel sweeps per step
+  int relaxIterations = 4;       // bias-removal sweeps per step
+  float pullForce = 4000.0f;     // total surface-row force (N), split over the points
+  float boundaryForce = 200.0f;  // per boundary row (N)
   // Boundary rows go to a body's hull vertices within this band (m) of its deepest vertex
   // (and within 2 cm of the plane): the far side of a finger lying along a plane gets none.
   float boundaryBand = 0.005f;

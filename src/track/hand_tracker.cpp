@@ -130,8 +130,8 @@ void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
   }
 }
 
-float HandTracker::evaluate(const HandFrame& frame) {
-  evaluate(simulator_, rig_, frame, posed_, error_);
+float HandTracker::evaluate(Simulator& simulator, const HandFrame& frame) {
+  evaluate(simulator, rig_, frame, posed_, error_);
   return error_.total;
 }
 
@@ -221,7 +221,7 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     world.restoreState(best->rig.world().state());
     bestBreakdown_ = best->error;
   } else {  // no simulation ran (all switched off): measure the state as it is
-    evaluate(frame);
+    evaluate(simulator_, frame);
     bestBreakdown_ = error_;
   }
   out.simulation = bestKind;
@@ -307,8 +307,7 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
     Candidate candidate;
     candidate.kind = s.labelled ? StrategyKind::FeatureDetection : StrategyKind::Normal;
     candidate.ran = true;
-    evaluate(acquisitionSimulator_, rig_, frame, posed_, error_);
-    candidate.error = error_.total;
+    candidate.error = evaluate(acquisitionSimulator_, frame);
     if (candidate.error < bestError) {
       bestError = candidate.error;
       world.saveState(best_);

@@ -47,7 +47,7 @@ class HandTracker {
                        PosedBodies& posed, ErrorBreakdown& error,
                        float abortAbove = std::numeric_limits<float>::infinity(),
                        std::span<const int> order = {});
-  float evaluate(const HandFrame& frame);  // of rig_, into error_
+  float evaluate(Simulator& simulator, const HandFrame& frame);  // of rig_, into error_
   // Each lane's candidate.error and lane.error, stopping a candidate's metric once it cannot
   // win (see computeErrorBounded): its error is then only a lower bound.
   void evaluateUntilBeaten(const HandFrame& frame);

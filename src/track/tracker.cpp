@@ -68,6 +68,8 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
     return Error{"substeps and iterations must be >= 1"};
   if (settings.pointSubsets < 1 || settings.pointSubsets > 16)
     return Error{"pointSubsets must be 1..16"};
+  // A negative band leaves no vertex near enough: the boundary planes would silently go.
+  if (!(settings.boundaryBand >= 0.0f)) return Error{"boundaryBand must be >= 0 m"};
   TrackerSettings s = settings;
   const float length = rightHand.metadata().referenceLength;
   const float referenceLength = model::HandDimensions{}.length;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <limits>
 
 #include "dynahand/synth.h"
 #include "dynahand/tracker.h"
@@ -160,6 +161,11 @@ TEST(Tracker, RejectsBadSettings) {
   TrackerSettings noSubsets;
   noSubsets.pointSubsets = 0;  // every step would pull on no point
   EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, noSubsets).ok());
+  for (const float band : {-0.001f, std::numeric_limits<float>::quiet_NaN()}) {
+    TrackerSettings badBand;
+    badBand.boundaryBand = band;  // no boundary row would be made
+    EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badBand).ok());
+  }
 }
 
 }  // namespace

@@ -60,13 +60,25 @@ class ConvexShape {
  private:
   ConvexShape() = default;
   void computeDerived();
-  // Closest point of face f's polygon to p (p projected on the plane, clamped to the edges).
-  Vec3 closestOnFace(int f, const Vec3& p) const;
   // projected (a point of face's plane) lies within the face's polygon.
   bool onFacePolygon(const Face& face, const Vec3& projected) const;
+  void buildEdges();
+  // Squared distance from p to the nearest hull edge; writes that edge and the parameter t
+  // in [0, 1] of its closest point (lowest edge index on ties).
+  float nearestEdge(const Vec3& p, int* edge, float* t) const;
 
   std::vector<Vec3> vertices_;
   std::vector<Face> faces_;
+  // Every hull edge once, as start point a, direction d = b - a and 1 / |d|^2, SoA padded to a
+  // multiple of four with far zero-length edges: an outside point whose foot misses its
+  // farthest face is nearest to one of them.
+  std::vector<float> edgeAx_, edgeAy_, edgeAz_, edgeDx_, edgeDy_, edgeDz_, edgeInvLen2_;
+  struct EdgeInfo {
+    int a, b;        // vertex indices
+    int lowestFace;  // lower index of its two faces
+  };
+  std::vector<EdgeInfo> edges_;
+  std::vector<int> vertexLowestFace_;  // (vertices) lowest index of the faces around it
   float volume_ = 0.0f;
   Vec3 centroid_ = Vec3::Zero();
   Mat3 unitInertia_ = Mat3::Zero();  // inertia about the centroid per kg, m^2

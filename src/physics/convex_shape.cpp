@@ -5,10 +5,16 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <utility>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 extern "C" {
 #include <libqhull_r/qhull_ra.h>
@@ -44,15 +50,6 @@ class CapturedStream {
   std::size_t size_ = 0;
   FILE* file_ = nullptr;
 };
-
-// Closest point to p on segment [a, b].
-Vec3 closestOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 ab = b - a;
-  const float len2 = ab.squaredNorm();
-  if (len2 <= 0.0f) return a;
-  const float t = std::clamp((p - a).dot(ab) / len2, 0.0f, 1.0f);
-  return a + t * ab;
-}
 
 }  // namespace
 
@@ -165,7 +162,115 @@ ConvexShape ConvexShape::box(const Vec3& halfExtents) {
   return std::move(shape).value();
 }
 
+void ConvexShape::buildEdges() {
+  std::vector<std::pair<std::pair<int, int>, int>> halfEdges;  // (lower, upper vertex), face
+  vertexLowestFace_.assign(vertices_.size(), std::numeric_limits<int>::max());
+  for (std::size_t f = 0; f < faces_.size(); ++f) {
+    const auto& loop = faces_[f].vertices;
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const int a = loop[i], b = loop[(i + 1) % loop.size()];
+      halfEdges.push_back({{std::min(a, b), std::max(a, b)}, static_cast<int>(f)});
+      int& lowest = vertexLowestFace_[static_cast<std::size_t>(a)];
+      lowest = std::min(lowest, static_cast<int>(f));
+    }
+  }
+  std::sort(halfEdges.begin(), halfEdges.end());  // an edge's two faces, lower one first
+  edges_.clear();
+  for (std::size_t i = 0; i < halfEdges.size(); ++i) {
+    if (i > 0 && halfEdges[i].first == halfEdges[i - 1].first) continue;
+    edges_.push_back({halfEdges[i].first.first, halfEdges[i].first.second, halfEdges[i].second});
+  }
+  const std::size_t padded = (edges_.size() + 3) / 4 * 4;
+  for (auto* v : {&edgeAx_, &edgeAy_, &edgeAz_}) v->assign(padded, 1e15f);
+  for (auto* v : {&edgeDx_, &edgeDy_, &edgeDz_, &edgeInvLen2_}) v->assign(padded, 0.0f);
+  for (std::size_t e = 0; e < edges_.size(); ++e) {
+    const Vec3& a = vertices_[static_cast<std::size_t>(edges_[e].a)];
+    const Vec3 d = vertices_[static_cast<std::size_t>(edges_[e].b)] - a;
+    edgeAx_[e] = a.x();
+    edgeAy_[e] = a.y();
+    edgeAz_[e] = a.z();
+    edgeDx_[e] = d.x();
+    edgeDy_[e] = d.y();
+    edgeDz_[e] = d.z();
+    edgeInvLen2_[e] = 1.0f / d.squaredNorm();
+  }
+}
+
+float ConvexShape::nearestEdge(const Vec3& p, int* edge, float* t) const {
+  // Four edges per step, each lane keeping its own minimum; the same arithmetic per lane in
+  // the SSE and the scalar path.
+  const std::size_t n = edgeAx_.size();
+  alignas(16) float best[4];
+  alignas(16) std::int32_t index[4];
+#if defined(__SSE2__)
+  const __m128 px = _mm_set1_ps(p.x()), py = _mm_set1_ps(p.y()), pz = _mm_set1_ps(p.z());
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+  __m128 bestV = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  __m128i indexV = _mm_setzero_si128();
+  __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
+  const __m128i four = _mm_set1_epi32(4);
+  for (std::size_t e = 0; e < n; e += 4) {
+    const __m128 wx = _mm_sub_ps(px, _mm_load_ps(edgeAx_.data() + e));
+    const __m128 wy = _mm_sub_ps(py, _mm_load_ps(edgeAy_.data() + e));
+    const __m128 wz = _mm_sub_ps(pz, _mm_load_ps(edgeAz_.data() + e));
+    const __m128 dx = _mm_load_ps(edgeDx_.data() + e);
+    const __m128 dy = _mm_load_ps(edgeDy_.data() + e);
+    const __m128 dz = _mm_load_ps(edgeDz_.data() + e);
+    const __m128 along =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(wx, dx), _mm_mul_ps(wy, dy)), _mm_mul_ps(wz, dz));
+    const __m128 s =
+        _mm_min_ps(_mm_max_ps(_mm_mul_ps(along, _mm_load_ps(edgeInvLen2_.data() + e)), zero), one);
+    const __m128 ex = _mm_sub_ps(wx, _mm_mul_ps(s, dx));
+    const __m128 ey = _mm_sub_ps(wy, _mm_mul_ps(s, dy));
+    const __m128 ez = _mm_sub_ps(wz, _mm_mul_ps(s, dz));
+    const __m128 d2 =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ex), _mm_mul_ps(ey, ey)), _mm_mul_ps(ez, ez));
+    const __m128 closer = _mm_cmplt_ps(d2, bestV);
+    bestV = _mm_min_ps(d2, bestV);
+    const __m128i m = _mm_castps_si128(closer);
+    indexV = _mm_or_si128(_mm_and_si128(m, lane), _mm_andnot_si128(m, indexV));
+    lane = _mm_add_epi32(lane, four);
+  }
+  _mm_store_ps(best, bestV);
+  _mm_store_si128(reinterpret_cast<__m128i*>(index), indexV);
+#else
+  for (int k = 0; k < 4; ++k) {
+    best[k] = std::numeric_limits<float>::infinity();
+    index[k] = 0;
+  }
+  for (std::size_t e = 0; e < n; e += 4) {
+    for (std::size_t k = 0; k < 4; ++k) {
+      const std::size_t i = e + k;
+      const float wx = p.x() - edgeAx_[i], wy = p.y() - edgeAy_[i], wz = p.z() - edgeAz_[i];
+      const float along = (wx * edgeDx_[i] + wy * edgeDy_[i]) + wz * edgeDz_[i];
+      const float s = std::min(std::max(along * edgeInvLen2_[i], 0.0f), 1.0f);
+      const float ex = wx - s * edgeDx_[i], ey = wy - s * edgeDy_[i], ez = wz - s * edgeDz_[i];
+      const float d2 = (ex * ex + ey * ey) + ez * ez;
+      if (d2 < best[k]) {
+        best[k] = d2;
+        index[k] = static_cast<std::int32_t>(i);
+      }
+    }
+  }
+#endif
+  int which = index[0];
+  float result = best[0];
+  for (int k = 1; k < 4; ++k) {
+    if (best[k] < result || (best[k] == result && index[k] < which)) {
+      result = best[k];
+      which = index[k];
+    }
+  }
+  const auto i = static_cast<std::size_t>(which);
+  const float wx = p.x() - edgeAx_[i], wy = p.y() - edgeAy_[i], wz = p.z() - edgeAz_[i];
+  const float along = (wx * edgeDx_[i] + wy * edgeDy_[i]) + wz * edgeDz_[i];
+  *t = std::min(std::max(along * edgeInvLen2_[i], 0.0f), 1.0f);
+  *edge = which;
+  return result;
+}
+
 void ConvexShape::computeDerived() {
+  buildEdges();
   // Fan-triangulate every face and form tetrahedra with a reference point near the centre;
   // accumulate volume, first moment and the second-moment (covariance) tensor in double.
   Vec3d ref = Vec3d::Zero();
@@ -221,26 +326,6 @@ bool ConvexShape::onFacePolygon(const Face& face, const Vec3& projected) const {
   return true;
 }
 
-Vec3 ConvexShape::closestOnFace(int f, const Vec3& p) const {
-  const Face& face = faces_[static_cast<std::size_t>(f)];
-  const Vec3 projected = p - (face.normal.dot(p) - face.offset) * face.normal;
-  if (onFacePolygon(face, projected)) return projected;
-  const std::size_t count = face.vertices.size();
-  Vec3 best = Vec3::Zero();
-  float bestDist2 = std::numeric_limits<float>::infinity();
-  for (std::size_t i = 0; i < count; ++i) {
-    const Vec3& a = vertices_[static_cast<std::size_t>(face.vertices[i])];
-    const Vec3& b = vertices_[static_cast<std::size_t>(face.vertices[(i + 1) % count])];
-    const Vec3 q = closestOnSegment(p, a, b);
-    const float d2 = (q - p).squaredNorm();
-    if (d2 < bestDist2) {
-      bestDist2 = d2;
-      best = q;
-    }
-  }
-  return best;
-}
-
 float ConvexShape::query(const Vec3& p, Vec3* closest, int* face) const {
   // Largest plane distance: the answer for inside points, a lower bound outside.
   int maxFace = 0;
@@ -273,23 +358,25 @@ float ConvexShape::queryFromPlane(const Vec3& p, float maxDist, int maxFace, Vec
       return maxDist;
     }
   }
-  // Otherwise the closest surface point lies on a face whose plane p is in front of.
-  int bestFace = maxFace;
-  Vec3 best = Vec3::Zero();
-  float bestDist2 = std::numeric_limits<float>::infinity();
-  for (std::size_t f = 0; f < faces_.size(); ++f) {
-    if (faces_[f].normal.dot(p) - faces_[f].offset <= 0.0f) continue;
-    const Vec3 q = closestOnFace(static_cast<int>(f), p);
-    const float d2 = (q - p).squaredNorm();
-    if (d2 < bestDist2) {
-      bestDist2 = d2;
-      best = q;
-      bestFace = static_cast<int>(f);
-    }
+  // Otherwise it lies on an edge: a point inside a face other than the farthest one would be
+  // nearer than that face's plane distance, which is at most the largest. Every edge is on
+  // the surface, so the nearest edge point is the closest surface point.
+  int edge = 0;
+  float t = 0.0f;
+  const float d2 = nearestEdge(p, &edge, &t);
+  const EdgeInfo& e = edges_[static_cast<std::size_t>(edge)];
+  if (closest) {
+    const auto i = static_cast<std::size_t>(edge);
+    *closest =
+        Vec3(edgeAx_[i], edgeAy_[i], edgeAz_[i]) + t * Vec3(edgeDx_[i], edgeDy_[i], edgeDz_[i]);
   }
-  if (closest) *closest = best;
-  if (face) *face = bestFace;
-  return std::sqrt(bestDist2);
+  if (face) {
+    // The faces holding the point: the edge's two, or all around a vertex end.
+    *face = t <= 0.0f   ? vertexLowestFace_[static_cast<std::size_t>(e.a)]
+            : t >= 1.0f ? vertexLowestFace_[static_cast<std::size_t>(e.b)]
+                        : e.lowestFace;
+  }
+  return std::sqrt(d2);
 }
 
 float ConvexShape::signedDistance(const Vec3& p) const {

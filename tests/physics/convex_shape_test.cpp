@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -187,6 +188,63 @@ TEST(ConvexShape, SignedDistanceMatchesBruteForceOnRandomHull) {
     EXPECT_EQ(sd <= 0.0f, inside);
     EXPECT_NEAR((shape->closestPoint(p) - p).norm(), std::abs(sd), 1e-6f);
   }
+}
+
+// Outside points whose foot misses the farthest face: the closest point is checked against a
+// reference that clamps p to every face polygon in turn (projection, else nearest edge point)
+// and keeps the nearest; the face reported must hold the point.
+TEST(ConvexShape, ClosestPointMatchesClampingToEveryFace) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  auto shape = ConvexShape::fromPoints(randomSpherePoints(rng, u, 40, 0.03f));
+  ASSERT_TRUE(shape.ok()) << shape.message();
+  const auto& vertices = shape->vertices();
+  auto onSegment = [](const Vec3& p, const Vec3& a, const Vec3& b) {
+    const float t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0f, 1.0f);
+    return Vec3(a + t * (b - a));
+  };
+  auto clampToFace = [&](const Face& f, const Vec3& p) {
+    const Vec3 projected = p - (f.normal.dot(p) - f.offset) * f.normal;
+    bool inside = true;
+    Vec3 best = projected;
+    float bestD2 = std::numeric_limits<float>::infinity();
+    for (std::size_t i = 0; i < f.vertices.size(); ++i) {
+      const Vec3& a = vertices[static_cast<std::size_t>(f.vertices[i])];
+      const Vec3& b = vertices[static_cast<std::size_t>(f.vertices[(i + 1) % f.vertices.size()])];
+      inside = inside && (b - a).cross(projected - a).dot(f.normal) >= 0.0f;
+      const Vec3 q = onSegment(p, a, b);
+      if ((q - p).squaredNorm() < bestD2) {
+        bestD2 = (q - p).squaredNorm();
+        best = q;
+      }
+    }
+    return inside ? projected : best;
+  };
+  int edgeCases = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 p(0.06f * u(rng), 0.06f * u(rng), 0.06f * u(rng));
+    Vec3 reference = p;
+    float referenceDist = std::numeric_limits<float>::infinity();
+    for (const Face& f : shape->faces()) {
+      const Vec3 q = clampToFace(f, p);
+      if ((q - p).norm() < referenceDist) {
+        referenceDist = (q - p).norm();
+        reference = q;
+      }
+    }
+    Vec3 closest;
+    int face = -1;
+    const float sd = shape->query(p, &closest, &face);
+    if (sd <= 0.0f) continue;
+    ASSERT_GE(face, 0);
+    const Face& f = shape->faces()[static_cast<std::size_t>(face)];
+    edgeCases += std::abs(f.normal.dot(p) - f.offset - sd) > 1e-6f;
+    EXPECT_NEAR(sd, referenceDist, 1e-6f);
+    EXPECT_LT((closest - reference).norm(), 1e-5f);
+    EXPECT_NEAR(f.normal.dot(closest), f.offset, 1e-6f) << "the face holds the point";
+    EXPECT_LT((clampToFace(f, closest) - closest).norm(), 1e-6f);
+  }
+  EXPECT_GT(edgeCases, 100);  // the edge branch ran
 }
 
 TEST(ConvexShape, QueryFromPlaneMatchesQueryInsideAndOutside) {

@@ -57,6 +57,7 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
       acquisitionSimulator_([&settings] {
         SimulationSettings every = simulationSettings(settings);
         every.pointSubsets = 1;
+        every.pullForce = settings.acquisitionPullForce;
         return every;
       }()),
       pool_(pool) {
@@ -83,11 +84,13 @@ void HandTracker::initialize(const model::ModelPose& pose) {
   rig_.setPose(pose);
   tracked_ = true;
   badFrames_ = 0;
+  lastWinner_ = -1;
 }
 
 void HandTracker::reset() {
   tracked_ = false;
   badFrames_ = 0;
+  lastWinner_ = -1;
 }
 
 bool HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
@@ -101,15 +104,20 @@ bool HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandF
 }
 
 void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
-  // In lane order (whatever the thread count, so the results are the same): the first
-  // candidate is measured in full; each later one gives up once it is sure to lose to the
-  // best so far, visiting first the points farthest from the first candidate's model (a
-  // losing pose is usually off on the same points). The winner is measured in full, so its
-  // error and breakdown are exactly computeError's.
+  // The last frame's winner first (it usually wins again), then the rest in lane order: the
+  // first candidate is measured in full; each later one gives up once it is sure to lose to
+  // the best so far, visiting first the points farthest from the first candidate's model (a
+  // losing pose is usually off on the same points). Whatever the order, every candidate at or
+  // below the best is measured in full, so the winner (least error, ties to the earlier lane)
+  // and its breakdown are exactly computeError's; only the losers' lower bounds depend on it.
   float best = std::numeric_limits<float>::infinity();
   metricOrder_.clear();
-  for (auto& lanePtr : lanes_) {
-    Lane& lane = *lanePtr;
+  const int count = static_cast<int>(lanes_.size());
+  const int first = lastWinner_ >= 0 && lastWinner_ < count ? lastWinner_ : 0;
+  for (int k = -1; k < count; ++k) {
+    const int index = k < 0 ? first : k;
+    if (k >= 0 && k == first) continue;
+    Lane& lane = *lanes_[static_cast<std::size_t>(index)];
     if (!lane.candidate.ran) continue;
     if (evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error, best, metricOrder_))
       best = std::min(best, lane.error.total);
@@ -209,13 +217,16 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   float bestError = std::numeric_limits<float>::infinity();
   StrategyKind bestKind = StrategyKind::Normal;
   const Lane* best = nullptr;
-  for (const auto& lane : lanes_) {
-    if (lane->candidate.ran && lane->candidate.error < bestError) {
-      bestError = lane->candidate.error;
-      bestKind = lane->candidate.kind;
-      best = lane.get();
+  lastWinner_ = -1;
+  for (std::size_t k = 0; k < lanes_.size(); ++k) {
+    const Lane& lane = *lanes_[k];
+    if (lane.candidate.ran && lane.candidate.error < bestError) {
+      bestError = lane.candidate.error;
+      bestKind = lane.candidate.kind;
+      best = &lane;
+      lastWinner_ = static_cast<int>(k);
     }
-    out.candidates.push_back(lane->candidate);
+    out.candidates.push_back(lane.candidate);
   }
   if (best != nullptr) {
     world.restoreState(best->rig.world().state());
@@ -266,6 +277,7 @@ model::ModelPose HandTracker::canonicalPose(const HandFrame& frame, const Vec2& 
 
 void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   auto& world = rig_.world();
+  lastWinner_ = -1;
   acquisitionSimulator_.beginFrame();
   Vec2 axis(0.0f, -1.0f);
   if (frame.cloud != nullptr && frame.cloud->segment.armDirectionImage.norm() > 0.5f) {

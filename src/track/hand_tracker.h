@@ -88,6 +88,9 @@ class HandTracker {
   ErrorBreakdown error_;          // of the last evaluate()
   ErrorBreakdown bestBreakdown_;  // of the state the world holds after a frame
   std::vector<int> metricOrder_;  // point order for evaluateUntilBeaten
+  // The lane that won the last frame (measured first in evaluateUntilBeaten: it usually wins
+  // again, so the others give up early); -1 after acquisition or a reset.
+  int lastWinner_ = -1;
   bool tracked_ = false;
   int badFrames_ = 0;
 };

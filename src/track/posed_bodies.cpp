@@ -119,6 +119,69 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
   return m;
 }
 
+// Eight points at once (one per lane), for one body: the points in the body frame
+// (R^T (p - t), toLocal's arithmetic) and each one's largest plane distance's face, lowest
+// index on ties (maxPlaneDistance's answer: the first plane holding a lane's maximum). Stops
+// early once every lane has seen a plane farther than its `stop`; such a lane's face then
+// only has a distance above its stop, not the largest.
+__attribute__((target("avx"))) void scanEightAvx(const float* rt, const Vec3& t, const float* wx,
+                                                 const float* wy, const float* wz, const float* nx,
+                                                 const float* ny, const float* nz, const float* o,
+                                                 std::size_t count, const float* stop, float* lx,
+                                                 float* ly, float* lz, std::int32_t* face) {
+  const __m256 dx = _mm256_sub_ps(_mm256_load_ps(wx), _mm256_set1_ps(t.x()));
+  const __m256 dy = _mm256_sub_ps(_mm256_load_ps(wy), _mm256_set1_ps(t.y()));
+  const __m256 dz = _mm256_sub_ps(_mm256_load_ps(wz), _mm256_set1_ps(t.z()));
+  __m256 q[3];
+  for (int k = 0; k < 3; ++k) {  // row k of R^T times d, toLocal's order
+    q[k] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(rt[3 * k]), dx),
+                                       _mm256_mul_ps(_mm256_set1_ps(rt[3 * k + 1]), dy)),
+                         _mm256_mul_ps(_mm256_set1_ps(rt[3 * k + 2]), dz));
+  }
+  const __m256 qx = q[0], qy = q[1], qz = q[2];
+  _mm256_store_ps(lx, qx);
+  _mm256_store_ps(ly, qy);
+  _mm256_store_ps(lz, qz);
+  __m256 best = _mm256_set1_ps(-1e30f);
+  __m256 index = _mm256_setzero_ps();
+  __m256 plane = _mm256_setzero_ps();
+  const __m256 one = _mm256_set1_ps(1.0f);
+  const __m256 stopAbove = _mm256_load_ps(stop);
+  __m256 beyond = _mm256_setzero_ps();  // lanes with a plane farther than their stop
+  for (std::size_t f = 0; f < count; ++f) {
+    const __m256 d =
+        _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_broadcast_ss(nx + f), qx),
+                                                  _mm256_mul_ps(_mm256_broadcast_ss(ny + f), qy)),
+                                    _mm256_mul_ps(_mm256_broadcast_ss(nz + f), qz)),
+                      _mm256_broadcast_ss(o + f));
+    const __m256 better = _mm256_cmp_ps(d, best, _CMP_GT_OQ);
+    best = _mm256_max_ps(d, best);
+    index = _mm256_or_ps(_mm256_and_ps(better, plane), _mm256_andnot_ps(better, index));
+    plane = _mm256_add_ps(plane, one);
+    // Once every lane has a plane beyond its stop, none of them can win: give up (the caller
+    // sees a distance above the stop, as with maxPlaneDistance's early return).
+    beyond = _mm256_or_ps(beyond, _mm256_cmp_ps(d, stopAbove, _CMP_GT_OQ));
+    if ((f & 7) == 7 && _mm256_movemask_ps(beyond) == 0xFF) break;
+  }
+  alignas(32) float indexOut[8];
+  _mm256_store_ps(indexOut, index);
+  for (int k = 0; k < 8; ++k) face[k] = static_cast<std::int32_t>(indexOut[k]);
+}
+
+// Per lane of eight points: whether body (centre c, radius r) could still beat or tie the
+// best so far, i.e. not sphereGap > best (sphereGap's arithmetic). A mask of 8 bits.
+__attribute__((target("avx"))) int reachableEightAvx(const float* px, const float* py,
+                                                     const float* pz, const float* best, float cx,
+                                                     float cy, float cz, float r) {
+  const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(px), _mm256_set1_ps(cx));
+  const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(py), _mm256_set1_ps(cy));
+  const __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(pz), _mm256_set1_ps(cz));
+  const __m256 d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx),
+                                  _mm256_add_ps(_mm256_mul_ps(dy, dy), _mm256_mul_ps(dz, dz)));
+  const __m256 gap = _mm256_sub_ps(_mm256_sqrt_ps(d2), _mm256_set1_ps(r));
+  return _mm256_movemask_ps(_mm256_cmp_ps(gap, _mm256_loadu_ps(best), _CMP_LE_OQ));
+}
+
 // Static initialisers may run before the library's own CPU detection: run it first.
 bool cpuHasAvx() {
   __builtin_cpu_init();
@@ -154,6 +217,8 @@ void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
       }
     }
   }
+  rotationT_.resize(shapes.size());
+  for (std::size_t i = 0; i < shapes.size(); ++i) setRotation(i);
   for (std::size_t i = 0; i < kMaxBodies; ++i) {  // far spheres pad past the last body
     const bool body = i < shapes.size();
     sphereR_[i] = body ? shapes_[i]->boundingRadius() : 0.0f;
@@ -173,7 +238,37 @@ void PosedBodies::setCentroid(std::size_t body, const Vec3& centroid) {
 void PosedBodies::setPose(int body, const Pose& pose) {
   const auto i = static_cast<std::size_t>(body);
   poses_[i] = pose;
+  setRotation(i);
   setCentroid(i, pose.transform(shapes_[i]->centroid()));
+}
+
+void PosedBodies::setRotation(std::size_t body) {
+  const Mat3 r = poses_[body].q.toRotationMatrix();
+  auto& t = rotationT_[body];
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) t[static_cast<std::size_t>(3 * row + col)] = r(col, row);
+}
+
+Vec3 PosedBodies::toLocal(std::size_t body, const Vec3& p) const {
+  const auto& r = rotationT_[body];
+  const Vec3& t = poses_[body].p;
+  const float dx = p.x() - t.x(), dy = p.y() - t.y(), dz = p.z() - t.z();
+  return {(r[0] * dx + r[1] * dy) + r[2] * dz, (r[3] * dx + r[4] * dy) + r[5] * dz,
+          (r[6] * dx + r[7] * dy) + r[8] * dz};
+}
+
+float PosedBodies::sphereGap(std::size_t body, const Vec3& p) const {
+  const float dx = p.x() - sphereX_[body], dy = p.y() - sphereY_[body], dz = p.z() - sphereZ_[body];
+  return std::sqrt(dx * dx + (dy * dy + dz * dz)) - sphereR_[body];
+}
+
+SurfaceHit PosedBodies::planarHit(std::size_t body, const Vec3& p, const Vec3& local, int face,
+                                  float sd) const {
+  // Outside, the bounding-sphere gap is also a lower bound on the exact distance; taking the
+  // larger keeps the sphere culling consistent (the answer is order-free).
+  const float d = sd < 0.0f ? -sd : std::max(sd, sphereGap(body, p));
+  const auto& f = shapes_[body]->faces()[static_cast<std::size_t>(face)];
+  return {static_cast<int>(body), face, d, sd, local - f.normal * sd};
 }
 
 bool PosedBodies::useWidePlaneScan(bool enabled) {
@@ -255,34 +350,149 @@ float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* fac
   return reduceLanes(best, index, face);
 }
 
+namespace {
+// (distance, body) in lexicographic order: the planar answer is the least over all bodies.
+bool beats(const SurfaceHit& a, const SurfaceHit& b) {
+  return a.distance < b.distance || (a.distance == b.distance && a.body < b.body);
+}
+}  // namespace
+
 SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) const {
   SurfaceHit best;
   best.distance = std::numeric_limits<float>::infinity();
   auto test = [&](int i) {
     const auto bi = static_cast<std::size_t>(i);
-    const Vec3 local = poses_[bi].inverseTransform(p);
+    const Vec3 local = toLocal(bi, p);
     int face = 0;
     // A body farther than the best so far cannot win: stop its planes early.
     const float sd = maxPlaneDistance(planes_[bi], local, &face, best.distance);
     if (sd > best.distance) return;
-    // Outside, the bounding-sphere bound is also a lower bound on the exact distance; taking
-    // the larger keeps the sphere culling below consistent (the answer is order-free).
-    const float d = sd < 0.0f ? -sd : std::max(sd, (p - worldCentroid(i)).norm() - sphereR_[bi]);
-    if (d < best.distance || (d == best.distance && i < best.body)) {
-      const auto& f = shapes_[bi]->faces()[static_cast<std::size_t>(face)];
-      best = {i, face, d, sd, local - f.normal * sd};
-    }
+    const SurfaceHit hit = planarHit(bi, p, local, face, sd);
+    if (beats(hit, best)) best = hit;
   };
   // The hint (usually last pass's body) gives a tight bound first; every other body is
-  // tested only when its bounding sphere comes closer than the best distance so far.
+  // tested only when its bounding sphere could still reach the best (ties included: the
+  // lower index wins them), so the answer does not depend on the hint.
   if (hint >= 0 && hint < size() && (mask >> hint & 1u)) test(hint);
   for (int i = 0; i < size(); ++i) {
     if (!(mask >> i & 1u) || i == hint) continue;
-    const float reach = best.distance + sphereR_[static_cast<std::size_t>(i)];
-    if ((p - worldCentroid(i)).squaredNorm() >= reach * reach) continue;
+    const float gap = sphereGap(static_cast<std::size_t>(i), p);
+    if (gap > best.distance || (gap == best.distance && i > best.body)) continue;
     test(i);
   }
   return best;
+}
+
+void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int> hints,
+                                    std::span<SurfaceHit> hits) const {
+  assert(hints.size() == points.size() && hits.size() == points.size());
+  const std::size_t n = points.size();
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+  const bool wide = wideScan.load(std::memory_order_relaxed);
+#else
+  const bool wide = false;
+#endif
+  if (!wide) {
+    for (std::size_t i = 0; i < n; ++i) {
+      hits[i] = nearestPlanar(points[i], kAllBodies, hints[i]);
+      hints[i] = hits[i].body;
+    }
+    return;
+  }
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+  const auto bodyCount = static_cast<std::size_t>(size());
+  // Points as SoA, padded to eight with copies of the last (never reported).
+  const std::size_t padded = (n + 7) / 8 * 8;
+  px_.resize(padded);
+  py_.resize(padded);
+  pz_.resize(padded);
+  bestDistance_.assign(padded, std::numeric_limits<float>::infinity());
+  for (std::size_t i = 0; i < padded; ++i) {
+    const Vec3& p = points[std::min(i, n - 1)];
+    px_[i] = p.x();
+    py_[i] = p.y();
+    pz_[i] = p.z();
+  }
+  for (SurfaceHit& h : hits) h = SurfaceHit{-1, -1, std::numeric_limits<float>::infinity()};
+  tests_.resize(bodyCount);
+  for (auto& t : tests_) t.clear();
+  if (n == 0) return;
+
+  // Tests every point listed for each body, eight per scan, keeping each point's least
+  // (distance, body).
+  auto runTests = [&] {
+    alignas(32) float wx[8], wy[8], wz[8], lx[8], ly[8], lz[8], stop[8];
+    alignas(32) std::int32_t face[8];
+    for (std::size_t b = 0; b < bodyCount; ++b) {
+      const auto& list = tests_[b];
+      const PlaneTable& table = planes_[b];
+      const std::size_t planes = shapes_[b]->faces().size();
+      for (std::size_t start = 0; start < list.size(); start += 8) {
+        const std::size_t lanes = std::min<std::size_t>(8, list.size() - start);
+        for (std::size_t k = 0; k < 8; ++k) {
+          const auto i = static_cast<std::size_t>(list[start + std::min(k, lanes - 1)]);
+          wx[k] = px_[i];
+          wy[k] = py_[i];
+          wz[k] = pz_[i];
+          stop[k] = bestDistance_[i];
+        }
+        scanEightAvx(rotationT_[b].data(), poses_[b].p, wx, wy, wz, table.nx.data(),
+                     table.ny.data(), table.nz.data(), table.offset.data(), planes, stop, lx, ly,
+                     lz, face);
+        for (std::size_t k = 0; k < lanes; ++k) {
+          const auto i = static_cast<std::size_t>(list[start + k]);
+          const auto f = static_cast<std::size_t>(face[k]);
+          const Vec3 local(lx[k], ly[k], lz[k]);
+          // The chosen plane's distance by the scan's arithmetic (its lane's bits).
+          const float sd = (table.nx[f] * local.x() + table.ny[f] * local.y()) +
+                           table.nz[f] * local.z() - table.offset[f];
+          if (sd > bestDistance_[i]) continue;  // farther than the best: cannot win
+          const SurfaceHit hit = planarHit(b, points[i], local, face[k], sd);
+          if (beats(hit, hits[i])) {
+            hits[i] = hit;
+            bestDistance_[i] = hit.distance;
+          }
+        }
+      }
+    }
+  };
+  // First each point's hint (or the body whose sphere is nearest): a tight bound.
+  for (std::size_t i = 0; i < n; ++i) {
+    int first = hints[i];
+    if (first < 0 || first >= size()) {
+      float nearest = std::numeric_limits<float>::infinity();
+      for (std::size_t b = 0; b < bodyCount; ++b) {
+        const float gap = sphereGap(b, points[i]);
+        if (gap < nearest) {
+          nearest = gap;
+          first = static_cast<int>(b);
+        }
+      }
+      hints[i] = first;
+    }
+    tests_[static_cast<std::size_t>(first)].push_back(static_cast<int>(i));
+  }
+  runTests();
+  for (auto& t : tests_) t.clear();
+  // Then every other body whose sphere could still beat or tie a point's best (a tie goes to
+  // the lower index, as in nearestPlanar; testing a body that cannot win changes nothing).
+  for (std::size_t b = 0; b < bodyCount; ++b) {
+    for (std::size_t start = 0; start < n; start += 8) {
+      int mask = reachableEightAvx(px_.data() + start, py_.data() + start, pz_.data() + start,
+                                   bestDistance_.data() + start, sphereX_[b], sphereY_[b],
+                                   sphereZ_[b], sphereR_[b]);
+      while (mask != 0) {
+        const int k = __builtin_ctz(static_cast<unsigned>(mask));
+        mask &= mask - 1;
+        const std::size_t i = start + static_cast<std::size_t>(k);
+        if (i >= n || hints[i] == static_cast<int>(b)) continue;
+        tests_[b].push_back(static_cast<int>(i));
+      }
+    }
+  }
+  runTests();
+  for (std::size_t i = 0; i < n; ++i) hints[i] = hits[i].body;
+#endif
 }
 
 SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {

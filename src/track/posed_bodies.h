@@ -58,6 +58,12 @@ class PosedBodies {
   // answer (e.g. last pass's), tried first to cull the others; -1 for none. The result
   // does not depend on the hint except on exact ties.
   SurfaceHit nearestPlanar(const Vec3& p, BodyMask mask = kAllBodies, int hint = -1) const;
+  // nearestPlanar(points[i], kAllBodies, hints[i]) for every point, with the same bits, into
+  // hits[i]; hints[i] becomes hits[i].body. Body by body over many points at once (eight
+  // points per AVX instruction where the CPU has it): the mapping's bulk path. Not for
+  // concurrent calls on one object (it keeps scratch buffers).
+  void nearestPlanarMany(std::span<const Vec3> points, std::span<int> hints,
+                         std::span<SurfaceHit> hits) const;
 
   // The face-plane scans (and the exact query's bounding-sphere bounds) run eight at a time
   // with AVX when the CPU has it (on by default there), else four per SSE instruction or
@@ -75,16 +81,34 @@ class PosedBodies {
   static float maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
                                 float stopAbove = std::numeric_limits<float>::infinity());
 
+  // p in body i's frame, R^T (p - t) with R kept as a matrix: the same bits in the scalar
+  // and the eight-wide paths.
+  Vec3 toLocal(std::size_t body, const Vec3& p) const;
+  // |p - c_i| - r_i: a lower bound on p's planar distance to body i (inside the sphere too).
+  float sphereGap(std::size_t body, const Vec3& p) const;
+  // A body-frame point's planar answer for body i: SurfaceHit with d = -sd inside, else
+  // max(sd, sphereGap); `face` and `sd` from the plane scan.
+  SurfaceHit planarHit(std::size_t body, const Vec3& p, const Vec3& local, int face,
+                       float sd) const;
+
   std::vector<const physics::ConvexShape*> shapes_;
   std::vector<const physics::ConvexShape*> tableShapes_;  // shapes the tables were built for
   std::vector<PlaneTable> planes_;
   std::vector<Pose> poses_;
   static constexpr std::size_t kMaxBodies = 32;  // BodyMask bits
   void setCentroid(std::size_t body, const Vec3& centroid);
+  void setRotation(std::size_t body);  // rotationT_ from poses_
 
   // Each body's bounding sphere: world centroid and radius about it, as SoA for eight-wide
   // bounds, padded past the last body with far spheres.
   std::array<float, kMaxBodies> sphereX_{}, sphereY_{}, sphereZ_{}, sphereR_{};
+  std::vector<std::array<float, 9>> rotationT_;  // (bodies) R^T row-major, see toLocal
+
+  // nearestPlanarMany's scratch: the points as SoA, per body the points to test, each
+  // point's best so far.
+  mutable std::vector<float> px_, py_, pz_;
+  mutable std::vector<std::vector<int>> tests_;
+  mutable std::vector<float> bestDistance_;
 };
 
 }  // namespace dynahand::track

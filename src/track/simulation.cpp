@@ -50,9 +50,14 @@ void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
 
 Simulator::Attachment Simulator::map(const HandRig& rig, const Vec3& p, BodyMask mask,
                                      bool anyDistance, int* hint) const {
-  Attachment a;
   const SurfaceHit hit = bodies_.nearestPlanar(p, mask, hint ? *hint : -1);
   if (hint) *hint = hit.body;
+  return attachment(rig, hit, anyDistance);
+}
+
+Simulator::Attachment Simulator::attachment(const HandRig& rig, const SurfaceHit& hit,
+                                            bool anyDistance) const {
+  Attachment a;
   if (hit.body < 0 || (!anyDistance && hit.distance > settings_.maxAttachDistance)) return a;
   const Pose& pose = bodies_.pose(hit.body);
   const Vec3& localNormal =
@@ -71,8 +76,19 @@ void Simulator::mapPoints(const HandRig& rig, const FrameInput& input, int subse
   hints_.resize(input.points.size(), -1);
   attachments_.resize(input.points.size());
   const auto stride = static_cast<std::size_t>(settings_.pointSubsets);
-  for (auto i = static_cast<std::size_t>(subset); i < input.points.size(); i += stride)
-    attachments_[i] = map(rig, input.points[i], kAllBodies, false, &hints_[i]);
+  subsetPoints_.clear();
+  subsetHints_.clear();
+  for (auto i = static_cast<std::size_t>(subset); i < input.points.size(); i += stride) {
+    subsetPoints_.push_back(input.points[i]);
+    subsetHints_.push_back(hints_[i]);
+  }
+  subsetHits_.resize(subsetPoints_.size());
+  bodies_.nearestPlanarMany(subsetPoints_, subsetHints_, subsetHits_);
+  std::size_t k = 0;
+  for (auto i = static_cast<std::size_t>(subset); i < input.points.size(); i += stride, ++k) {
+    hints_[i] = subsetHints_[k];
+    attachments_[i] = attachment(rig, subsetHits_[k], false);
+  }
 }
 
 void Simulator::addRows(HandRig& rig, const FrameInput& input) {

@@ -94,6 +94,8 @@ class Simulator {
   void addRows(HandRig& rig, const FrameInput& input);
   Attachment map(const HandRig& rig, const Vec3& p, BodyMask mask, bool anyDistance,
                  int* hint) const;
+  // The attachment of a planar query's answer (none when too far, or on the forearm's cut).
+  Attachment attachment(const HandRig& rig, const SurfaceHit& hit, bool anyDistance) const;
   // Maps subset `subset` of the points (see pointSubsets) into attachments_.
   void mapPoints(const HandRig& rig, const FrameInput& input, int subset);
 
@@ -102,6 +104,10 @@ class Simulator {
   std::vector<const physics::ConvexShape*> shapes_;
   std::vector<Pose> poses_;
   std::vector<int> hints_;  // (points) body each point attached to last pass
+  // mapPoints' scratch: the subset's points, hints and planar answers, contiguous.
+  std::vector<Vec3> subsetPoints_;
+  std::vector<int> subsetHints_;
+  std::vector<SurfaceHit> subsetHits_;
   std::vector<Attachment> attachments_;
   std::vector<Attachment> frameStart_;  // the frame's first mapping (see beginFrame)
   int frameStartSubset_ = 0;            // the subset frameStart_ holds

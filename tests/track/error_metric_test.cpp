@@ -255,6 +255,35 @@ TEST(PosedBodies, PlanarQueryIsExactInsideAndALowerBoundOutside) {
   EXPECT_GT(inside, 0);
 }
 
+// The bulk planar query (body by body, eight points at a time where the CPU has AVX) answers
+// every point exactly as the one-point query does, whatever the hints.
+TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    Scene s = randomScene(seed);
+    PosedBodies bodies;
+    bodies.set(s.shapePtrs, s.poses);
+    for (const bool wide : {true, false}) {
+      PosedBodies::useWidePlaneScan(wide);
+      std::vector<int> hints(s.points.size());
+      for (std::size_t i = 0; i < hints.size(); ++i)
+        hints[i] = static_cast<int>(i % 7) - 1;  // none, right and wrong bodies
+      const std::vector<int> given = hints;
+      std::vector<SurfaceHit> hits(s.points.size());
+      bodies.nearestPlanarMany(s.points, hints, hits);
+      for (std::size_t i = 0; i < s.points.size(); ++i) {
+        const SurfaceHit one = bodies.nearestPlanar(s.points[i], kAllBodies, given[i]);
+        EXPECT_EQ(hits[i].body, one.body);
+        EXPECT_EQ(hits[i].face, one.face);
+        EXPECT_EQ(hits[i].distance, one.distance);
+        EXPECT_EQ(hits[i].signedDistance, one.signedDistance);
+        EXPECT_EQ(hits[i].localPoint, one.localPoint);
+        EXPECT_EQ(hints[i], one.body);
+      }
+    }
+  }
+  PosedBodies::useWidePlaneScan(true);
+}
+
 // The AVX plane scan (where the CPU has it) and the SSE one give the same bits.
 TEST(PosedBodies, WideAndNarrowPlaneScansAgreeBitForBit) {
   const bool wide = PosedBodies::useWidePlaneScan(true);

@@ -124,21 +124,31 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
 // index on ties (maxPlaneDistance's answer: the first plane holding a lane's maximum). Stops
 // early once every lane has seen a plane farther than its `stop`; such a lane's face then
 // only has a distance above its stop, not the largest.
-__attribute__((target("avx"))) void scanEightAvx(const float* rt, const Vec3& t, const float* wx,
-                                                 const float* wy, const float* wz, const float* nx,
-                                                 const float* ny, const float* nz, const float* o,
-                                                 std::size_t count, const float* stop, float* lx,
-                                                 float* ly, float* lz, std::int32_t* face) {
+__attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec3& t,
+                                                 const float* wx, const float* wy, const float* wz,
+                                                 const float* nx, const float* ny, const float* nz,
+                                                 const float* o, std::size_t count,
+                                                 const float* stop, float* lx, float* ly, float* lz,
+                                                 std::int32_t* face) {
+  // toLocal, eight lanes at once, operation for operation.
+  const __m256 w = _mm256_set1_ps(rotation.w());
+  const __m256 ux = _mm256_set1_ps(-rotation.x()), uy = _mm256_set1_ps(-rotation.y()),
+               uz = _mm256_set1_ps(-rotation.z());
   const __m256 dx = _mm256_sub_ps(_mm256_load_ps(wx), _mm256_set1_ps(t.x()));
   const __m256 dy = _mm256_sub_ps(_mm256_load_ps(wy), _mm256_set1_ps(t.y()));
   const __m256 dz = _mm256_sub_ps(_mm256_load_ps(wz), _mm256_set1_ps(t.z()));
-  __m256 q[3];
-  for (int k = 0; k < 3; ++k) {  // row k of R^T times d, toLocal's order
-    q[k] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(rt[3 * k]), dx),
-                                       _mm256_mul_ps(_mm256_set1_ps(rt[3 * k + 1]), dy)),
-                         _mm256_mul_ps(_mm256_set1_ps(rt[3 * k + 2]), dz));
-  }
-  const __m256 qx = q[0], qy = q[1], qz = q[2];
+  __m256 cx = _mm256_sub_ps(_mm256_mul_ps(uy, dz), _mm256_mul_ps(uz, dy));
+  __m256 cy = _mm256_sub_ps(_mm256_mul_ps(uz, dx), _mm256_mul_ps(ux, dz));
+  __m256 cz = _mm256_sub_ps(_mm256_mul_ps(ux, dy), _mm256_mul_ps(uy, dx));
+  cx = _mm256_add_ps(cx, cx);
+  cy = _mm256_add_ps(cy, cy);
+  cz = _mm256_add_ps(cz, cz);
+  const __m256 qx = _mm256_add_ps(_mm256_add_ps(dx, _mm256_mul_ps(w, cx)),
+                                  _mm256_sub_ps(_mm256_mul_ps(uy, cz), _mm256_mul_ps(uz, cy)));
+  const __m256 qy = _mm256_add_ps(_mm256_add_ps(dy, _mm256_mul_ps(w, cy)),
+                                  _mm256_sub_ps(_mm256_mul_ps(uz, cx), _mm256_mul_ps(ux, cz)));
+  const __m256 qz = _mm256_add_ps(_mm256_add_ps(dz, _mm256_mul_ps(w, cz)),
+                                  _mm256_sub_ps(_mm256_mul_ps(ux, cy), _mm256_mul_ps(uy, cx)));
   _mm256_store_ps(lx, qx);
   _mm256_store_ps(ly, qy);
   _mm256_store_ps(lz, qz);
@@ -217,8 +227,6 @@ void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
       }
     }
   }
-  rotationT_.resize(shapes.size());
-  for (std::size_t i = 0; i < shapes.size(); ++i) setRotation(i);
   for (std::size_t i = 0; i < kMaxBodies; ++i) {  // far spheres pad past the last body
     const bool body = i < shapes.size();
     sphereR_[i] = body ? shapes_[i]->boundingRadius() : 0.0f;
@@ -238,23 +246,23 @@ void PosedBodies::setCentroid(std::size_t body, const Vec3& centroid) {
 void PosedBodies::setPose(int body, const Pose& pose) {
   const auto i = static_cast<std::size_t>(body);
   poses_[i] = pose;
-  setRotation(i);
   setCentroid(i, pose.transform(shapes_[i]->centroid()));
 }
 
-void PosedBodies::setRotation(std::size_t body) {
-  const Mat3 r = poses_[body].q.toRotationMatrix();
-  auto& t = rotationT_[body];
-  for (int row = 0; row < 3; ++row)
-    for (int col = 0; col < 3; ++col) t[static_cast<std::size_t>(3 * row + col)] = r(col, row);
-}
-
 Vec3 PosedBodies::toLocal(std::size_t body, const Vec3& p) const {
-  const auto& r = rotationT_[body];
+  // Pose::inverseTransform's arithmetic spelled out (Eigen's quaternion rotation
+  // v + 2w (u x v) + u x 2(u x v) with u the conjugate's vector part), so that the eight-wide
+  // path can repeat it operation for operation.
+  const Quat& q = poses_[body].q;
   const Vec3& t = poses_[body].p;
+  const float w = q.w(), ux = -q.x(), uy = -q.y(), uz = -q.z();
   const float dx = p.x() - t.x(), dy = p.y() - t.y(), dz = p.z() - t.z();
-  return {(r[0] * dx + r[1] * dy) + r[2] * dz, (r[3] * dx + r[4] * dy) + r[5] * dz,
-          (r[6] * dx + r[7] * dy) + r[8] * dz};
+  float cx = uy * dz - uz * dy, cy = uz * dx - ux * dz, cz = ux * dy - uy * dx;
+  cx += cx;
+  cy += cy;
+  cz += cz;
+  return {(dx + w * cx) + (uy * cz - uz * cy), (dy + w * cy) + (uz * cx - ux * cz),
+          (dz + w * cz) + (ux * cy - uy * cx)};
 }
 
 float PosedBodies::sphereGap(std::size_t body, const Vec3& p) const {
@@ -436,9 +444,8 @@ void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int>
           wz[k] = pz_[i];
           stop[k] = bestDistance_[i];
         }
-        scanEightAvx(rotationT_[b].data(), poses_[b].p, wx, wy, wz, table.nx.data(),
-                     table.ny.data(), table.nz.data(), table.offset.data(), planes, stop, lx, ly,
-                     lz, face);
+        scanEightAvx(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
+                     table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, face);
         for (std::size_t k = 0; k < lanes; ++k) {
           const auto i = static_cast<std::size_t>(list[start + k]);
           const auto f = static_cast<std::size_t>(face[k]);

@@ -81,8 +81,8 @@ class PosedBodies {
   static float maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
                                 float stopAbove = std::numeric_limits<float>::infinity());
 
-  // p in body i's frame, R^T (p - t) with R kept as a matrix: the same bits in the scalar
-  // and the eight-wide paths.
+  // p in body i's frame (Pose::inverseTransform, written out so that the eight-wide path can
+  // give the same bits).
   Vec3 toLocal(std::size_t body, const Vec3& p) const;
   // |p - c_i| - r_i: a lower bound on p's planar distance to body i (inside the sphere too).
   float sphereGap(std::size_t body, const Vec3& p) const;
@@ -97,12 +97,10 @@ class PosedBodies {
   std::vector<Pose> poses_;
   static constexpr std::size_t kMaxBodies = 32;  // BodyMask bits
   void setCentroid(std::size_t body, const Vec3& centroid);
-  void setRotation(std::size_t body);  // rotationT_ from poses_
 
   // Each body's bounding sphere: world centroid and radius about it, as SoA for eight-wide
   // bounds, padded past the last body with far spheres.
   std::array<float, kMaxBodies> sphereX_{}, sphereY_{}, sphereZ_{}, sphereR_{};
-  std::vector<std::array<float, 9>> rotationT_;  // (bodies) R^T row-major, see toLocal
 
   // nearestPlanarMany's scratch: the points as SoA, per body the points to test, each
   // point's best so far.

@@ -5,6 +5,19 @@
 
 namespace dynahand::track {
 
+namespace {
+// std::lround for pixel coordinates (|x| < 2^22), inline: truncation and the fraction are
+// exact there, so halves round away from zero exactly as lround does.
+int roundToPixel(float x) {
+  if (!(std::abs(x) < 4194304.0f)) return static_cast<int>(std::lround(x));
+  int i = static_cast<int>(x);
+  const float fraction = x - static_cast<float>(i);
+  if (fraction >= 0.5f) ++i;
+  if (fraction <= -0.5f) --i;
+  return i;
+}
+}  // namespace
+
 const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
   result_.fired = false;
   if (!cloud.segment.found || cloud.segmentBox.empty()) return result_;
@@ -15,12 +28,17 @@ const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
   double su = 0, sv = 0;
   int count = 0;
   const PixelBox& box = cloud.segmentBox;
+  rowFirst_.assign(static_cast<std::size_t>(box.y1 - box.y0), -1);
+  rowLast_.assign(static_cast<std::size_t>(box.y1 - box.y0), -1);
   for (int v = box.y0; v < box.y1; ++v) {
+    const auto row = static_cast<std::size_t>(v - box.y0);
     for (int u = box.x0; u < box.x1; ++u) {
       if (cloud.mask[static_cast<std::size_t>(v * width + u)]) {
         su += u;
         sv += v;
         ++count;
+        if (rowFirst_[row] < 0) rowFirst_[row] = u;
+        rowLast_[row] = u;
       }
     }
   }
@@ -46,10 +64,13 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
   const PixelBox& box = cloud.segmentBox;
   const Vec2 across(-axis.y(), axis.x());
 
+  // The mask's extent along and across the axis: along a row each projection is monotonic in
+  // u (float rounding keeps it so), so the row's first and last mask pixels bound it.
   float sMax = -1e9f, tMin = 1e9f, tMax = -1e9f;
   for (int v = box.y0; v < box.y1; ++v) {
-    for (int u = box.x0; u < box.x1; ++u) {
-      if (!cloud.mask[static_cast<std::size_t>(v * width + u)]) continue;
+    const auto row = static_cast<std::size_t>(v - box.y0);
+    if (rowFirst_[row] < 0) continue;
+    for (const int u : {rowFirst_[row], rowLast_[row]}) {
       const Vec2 d = Vec2(static_cast<float>(u), static_cast<float>(v)) - c;
       sMax = std::max(sMax, d.dot(axis));
       const float t = d.dot(across);
@@ -66,9 +87,11 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
   const int rows = std::max(1, static_cast<int>(settings_.maxScanLengthM * pxPerM));
   const int columns = static_cast<int>(tMax - tMin) + 1;
 
-  auto masked = [&](float s, float t) {
-    const Vec2 p = c + axis * s + across * t;
-    const int u = static_cast<int>(std::lround(p.x())), v = static_cast<int>(std::lround(p.y()));
+  // Whether the sample at t across the scanline through rowBase = c + axis s is on the mask
+  // (c + axis s + across t, the same sums as one expression).
+  auto masked = [&](const Vec2& rowBase, float t) {
+    const Vec2 p = rowBase + across * t;
+    const int u = roundToPixel(p.x()), v = roundToPixel(p.y());
     if (!box.contains(u, v)) return false;
     return cloud.mask[static_cast<std::size_t>(v * width + u)] != 0;
   };
@@ -77,10 +100,11 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
   previousRuns_.clear();
   for (int row = 0; row < rows; ++row) {
     const float s = sMax - static_cast<float>(row);
+    const Vec2 rowBase = c + axis * s;
     runs_.clear();
     int begin = -1, gap = 0;
     for (int col = 0; col <= columns; ++col) {
-      const bool on = col < columns && masked(s, tMin + static_cast<float>(col));
+      const bool on = col < columns && masked(rowBase, tMin + static_cast<float>(col));
       if (on) {
         if (begin < 0) begin = col;
         gap = 0;

@@ -55,6 +55,10 @@ class FingerDetector {
   FingerDetection result_;
   std::vector<Run> runs_, previousRuns_;
   std::vector<Segment> segments_;
+  // Per row of the segment box, the first and last mask column (-1: none), found once per
+  // frame: a projection of the pixels on a direction is monotonic along a row, so its extremes
+  // over the mask are at those two pixels, for every scan direction.
+  std::vector<int> rowFirst_, rowLast_;
 };
 
 }  // namespace dynahand::track

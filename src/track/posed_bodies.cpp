@@ -119,17 +119,17 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
   return m;
 }
 
-// Eight points at once (one per lane), for one body: the points in the body frame
-// (R^T (p - t), toLocal's arithmetic) and each one's largest plane distance's face, lowest
-// index on ties (maxPlaneDistance's answer: the first plane holding a lane's maximum). Stops
-// early once every lane has seen a plane farther than its `stop`; such a lane's face then
-// only has a distance above its stop, not the largest.
+// Eight points at once (one per lane), for one body: the points in the body frame (toLocal's
+// arithmetic), each one's largest plane distance and its face, lowest index on ties
+// (maxPlaneDistance's answer: the first plane holding a lane's maximum). Stops early once
+// every lane has seen a plane farther than its `stop`; such a lane then only has a distance
+// above its stop, not the largest.
 __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec3& t,
                                                  const float* wx, const float* wy, const float* wz,
                                                  const float* nx, const float* ny, const float* nz,
                                                  const float* o, std::size_t count,
                                                  const float* stop, float* lx, float* ly, float* lz,
-                                                 std::int32_t* face) {
+                                                 float* largest, std::int32_t* face) {
   // toLocal, eight lanes at once, operation for operation.
   const __m256 w = _mm256_set1_ps(rotation.w());
   const __m256 ux = _mm256_set1_ps(-rotation.x()), uy = _mm256_set1_ps(-rotation.y()),
@@ -173,6 +173,9 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
     beyond = _mm256_or_ps(beyond, _mm256_cmp_ps(d, stopAbove, _CMP_GT_OQ));
     if ((f & 7) == 7 && _mm256_movemask_ps(beyond) == 0xFF) break;
   }
+  // The lane's maximum is its face's distance by the scalar formula's arithmetic (same
+  // operations in the same order), so callers need not recompute it.
+  _mm256_store_ps(largest, best);
   alignas(32) float indexOut[8];
   _mm256_store_ps(indexOut, index);
   for (int k = 0; k < 8; ++k) face[k] = static_cast<std::int32_t>(indexOut[k]);
@@ -393,6 +396,17 @@ SurfaceHit PosedBodies::nearestPlanar(const Vec3& p, BodyMask mask, int hint) co
 
 void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int> hints,
                                     std::span<SurfaceHit> hits) const {
+  nearestMany(points, hints, hits, false);
+  for (std::size_t i = 0; i < points.size(); ++i) hints[i] = hits[i].body;
+}
+
+void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int> hints,
+                              std::span<SurfaceHit> hits) const {
+  nearestMany(points, hints, hits, true);
+}
+
+void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int> hints,
+                              std::span<SurfaceHit> hits, bool exact) const {
   assert(hints.size() == points.size() && hits.size() == points.size());
   const std::size_t n = points.size();
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
@@ -401,10 +415,9 @@ void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int>
   const bool wide = false;
 #endif
   if (!wide) {
-    for (std::size_t i = 0; i < n; ++i) {
-      hits[i] = nearestPlanar(points[i], kAllBodies, hints[i]);
-      hints[i] = hits[i].body;
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      hits[i] = exact ? nearest(points[i], kAllBodies, hints[i])
+                      : nearestPlanar(points[i], kAllBodies, hints[i]);
     return;
   }
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
@@ -414,6 +427,7 @@ void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int>
   px_.resize(padded);
   py_.resize(padded);
   pz_.resize(padded);
+  first_.resize(n);
   bestDistance_.assign(padded, std::numeric_limits<float>::infinity());
   for (std::size_t i = 0; i < padded; ++i) {
     const Vec3& p = points[std::min(i, n - 1)];
@@ -427,9 +441,9 @@ void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int>
   if (n == 0) return;
 
   // Tests every point listed for each body, eight per scan, keeping each point's least
-  // (distance, body).
+  // (distance, body): the planar answer, or the exact one from the plane scan's bound.
   auto runTests = [&] {
-    alignas(32) float wx[8], wy[8], wz[8], lx[8], ly[8], lz[8], stop[8];
+    alignas(32) float wx[8], wy[8], wz[8], lx[8], ly[8], lz[8], stop[8], largest[8];
     alignas(32) std::int32_t face[8];
     for (std::size_t b = 0; b < bodyCount; ++b) {
       const auto& list = tests_[b];
@@ -445,16 +459,24 @@ void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int>
           stop[k] = bestDistance_[i];
         }
         scanEightAvx(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
-                     table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, face);
+                     table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, largest, face);
         for (std::size_t k = 0; k < lanes; ++k) {
+          // Farther than the best (outside, the exact distance is at least the plane's).
+          const float sd = largest[k];
+          if (sd > stop[k]) continue;
           const auto i = static_cast<std::size_t>(list[start + k]);
-          const auto f = static_cast<std::size_t>(face[k]);
           const Vec3 local(lx[k], ly[k], lz[k]);
-          // The chosen plane's distance by the scan's arithmetic (its lane's bits).
-          const float sd = (table.nx[f] * local.x() + table.ny[f] * local.y()) +
-                           table.nz[f] * local.z() - table.offset[f];
-          if (sd > bestDistance_[i]) continue;  // farther than the best: cannot win
-          const SurfaceHit hit = planarHit(b, points[i], local, face[k], sd);
+          SurfaceHit hit;
+          if (exact) {
+            Vec3 closest;
+            int closestFace = -1;
+            const float signedDistance =
+                shapes_[b]->queryFromPlane(local, sd, face[k], &closest, &closestFace);
+            hit = {static_cast<int>(b), closestFace, std::abs(signedDistance), signedDistance,
+                   closest};
+          } else {
+            hit = planarHit(b, points[i], local, face[k], sd);
+          }
           if (beats(hit, hits[i])) {
             hits[i] = hit;
             bestDistance_[i] = hit.distance;
@@ -475,14 +497,15 @@ void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int>
           first = static_cast<int>(b);
         }
       }
-      hints[i] = first;
     }
+    first_[i] = first;
     tests_[static_cast<std::size_t>(first)].push_back(static_cast<int>(i));
   }
   runTests();
   for (auto& t : tests_) t.clear();
   // Then every other body whose sphere could still beat or tie a point's best (a tie goes to
-  // the lower index, as in nearestPlanar; testing a body that cannot win changes nothing).
+  // the lower index, as in the one-point queries; testing a body that cannot win changes
+  // nothing). The sphere gap is a lower bound on both the planar and the exact distance.
   for (std::size_t b = 0; b < bodyCount; ++b) {
     for (std::size_t start = 0; start < n; start += 8) {
       int mask = reachableEightAvx(px_.data() + start, py_.data() + start, pz_.data() + start,
@@ -492,13 +515,12 @@ void PosedBodies::nearestPlanarMany(std::span<const Vec3> points, std::span<int>
         const int k = __builtin_ctz(static_cast<unsigned>(mask));
         mask &= mask - 1;
         const std::size_t i = start + static_cast<std::size_t>(k);
-        if (i >= n || hints[i] == static_cast<int>(b)) continue;
+        if (i >= n || first_[i] == static_cast<int>(b)) continue;
         tests_[b].push_back(static_cast<int>(i));
       }
     }
   }
   runTests();
-  for (std::size_t i = 0; i < n; ++i) hints[i] = hits[i].body;
 #endif
 }
 

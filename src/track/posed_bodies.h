@@ -64,6 +64,10 @@ class PosedBodies {
   // concurrent calls on one object (it keeps scratch buffers).
   void nearestPlanarMany(std::span<const Vec3> points, std::span<int> hints,
                          std::span<SurfaceHit> hits) const;
+  // nearest(points[i], kAllBodies, hints[i]) for every point, with the same bits, the same way
+  // (the error metric's bulk path).
+  void nearestMany(std::span<const Vec3> points, std::span<const int> hints,
+                   std::span<SurfaceHit> hits) const;
 
   // The face-plane scans (and the exact query's bounding-sphere bounds) run eight at a time
   // with AVX when the CPU has it (on by default there), else four per SSE instruction or
@@ -102,9 +106,12 @@ class PosedBodies {
   // bounds, padded past the last body with far spheres.
   std::array<float, kMaxBodies> sphereX_{}, sphereY_{}, sphereZ_{}, sphereR_{};
 
-  // nearestPlanarMany's scratch: the points as SoA, per body the points to test, each
-  // point's best so far.
+  void nearestMany(std::span<const Vec3> points, std::span<const int> hints,
+                   std::span<SurfaceHit> hits, bool exact) const;
+  // The bulk queries' scratch: the points as SoA, each point's first body, per body the points
+  // to test, each point's best so far.
   mutable std::vector<float> px_, py_, pz_;
+  mutable std::vector<int> first_;
   mutable std::vector<std::vector<int>> tests_;
   mutable std::vector<float> bestDistance_;
 };

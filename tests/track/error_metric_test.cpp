@@ -255,8 +255,8 @@ TEST(PosedBodies, PlanarQueryIsExactInsideAndALowerBoundOutside) {
   EXPECT_GT(inside, 0);
 }
 
-// The bulk planar query (body by body, eight points at a time where the CPU has AVX) answers
-// every point exactly as the one-point query does, whatever the hints.
+// The bulk planar and exact queries (body by body, eight points at a time where the CPU has
+// AVX) answer every point exactly as the one-point queries do, whatever the hints.
 TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
     Scene s = randomScene(seed);
@@ -268,15 +268,19 @@ TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
       for (std::size_t i = 0; i < hints.size(); ++i)
         hints[i] = static_cast<int>(i % 7) - 1;  // none, right and wrong bodies
       const std::vector<int> given = hints;
-      std::vector<SurfaceHit> hits(s.points.size());
+      std::vector<SurfaceHit> hits(s.points.size()), exactHits(s.points.size());
       bodies.nearestPlanarMany(s.points, hints, hits);
+      bodies.nearestMany(s.points, given, exactHits);
       for (std::size_t i = 0; i < s.points.size(); ++i) {
         const SurfaceHit one = bodies.nearestPlanar(s.points[i], kAllBodies, given[i]);
-        EXPECT_EQ(hits[i].body, one.body);
-        EXPECT_EQ(hits[i].face, one.face);
-        EXPECT_EQ(hits[i].distance, one.distance);
-        EXPECT_EQ(hits[i].signedDistance, one.signedDistance);
-        EXPECT_EQ(hits[i].localPoint, one.localPoint);
+        const SurfaceHit exact = bodies.nearest(s.points[i], kAllBodies, given[i]);
+        for (const auto& [a, b] : {std::pair{hits[i], one}, std::pair{exactHits[i], exact}}) {
+          EXPECT_EQ(a.body, b.body);
+          EXPECT_EQ(a.face, b.face);
+          EXPECT_EQ(a.distance, b.distance);
+          EXPECT_EQ(a.signedDistance, b.signedDistance);
+          EXPECT_EQ(a.localPoint, b.localPoint);
+        }
         EXPECT_EQ(hints[i], one.body);
       }
     }

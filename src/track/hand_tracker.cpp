@@ -112,12 +112,13 @@ void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
   // and its breakdown are exactly computeError's; only the losers' lower bounds depend on it.
   float best = std::numeric_limits<float>::infinity();
   metricOrder_.clear();
-  const int count = static_cast<int>(lanes_.size());
-  const int first = lastWinner_ >= 0 && lastWinner_ < count ? lastWinner_ : 0;
-  for (int k = -1; k < count; ++k) {
-    const int index = k < 0 ? first : k;
-    if (k >= 0 && k == first) continue;
-    Lane& lane = *lanes_[static_cast<std::size_t>(index)];
+  const std::size_t count = lanes_.size();
+  const std::size_t first =
+      lastWinner_ >= 0 && static_cast<std::size_t>(lastWinner_) < count ? lastWinner_ : 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    // first, then 0, 1, ... without it
+    const std::size_t index = k == 0 ? first : (k <= first ? k - 1 : k);
+    Lane& lane = *lanes_[index];
     if (!lane.candidate.ran) continue;
     if (evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error, best, metricOrder_))
       best = std::min(best, lane.error.total);

@@ -35,6 +35,27 @@ float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
 }
 
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
+// ((nx qx + ny qy) + nz qz) - o lane by lane: a plane distance in the scalar paths' order.
+__attribute__((target("avx"), always_inline)) inline __m256 planeDistance8(__m256 nx, __m256 ny,
+                                                                           __m256 nz, __m256 o,
+                                                                           __m256 qx, __m256 qy,
+                                                                           __m256 qz) {
+  return _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, qx), _mm256_mul_ps(ny, qy)),
+                                     _mm256_mul_ps(nz, qz)),
+                       o);
+}
+
+// Each lane's largest distance so far and the index of the first plane holding it.
+__attribute__((target("avx"), always_inline)) inline void keepLargest(__m256 d, __m256 at,
+                                                                      __m256& best, __m256& index) {
+  const __m256 better = _mm256_cmp_ps(d, best, _CMP_GT_OQ);
+  best = _mm256_max_ps(d, best);  // == better ? d : best (no NaNs here)
+  // A bitwise select: GCC turns blendv with a compare mask into per-lane branches.
+  index = _mm256_or_ps(_mm256_and_ps(better, at), _mm256_andnot_ps(better, index));
+}
+#endif
+
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
 // The same eight lanes as the SSE path in one 256-bit register (half the loop trips). Only
 // AVX (no FMA): each lane's multiply-add sequence is unchanged, so both paths give identical
 // bits. Face indices ride in a float register (exact far beyond any face count), since
@@ -50,15 +71,9 @@ __attribute__((target("avx"))) float maxPlaneDistanceAvx(const float* nx, const 
   __m256 index = _mm256_setzero_ps();
   __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
   for (std::size_t f = 0; f < n; f += 8) {
-    const __m256 d =
-        _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(nx + f), qx),
-                                                  _mm256_mul_ps(_mm256_loadu_ps(ny + f), qy)),
-                                    _mm256_mul_ps(_mm256_loadu_ps(nz + f), qz)),
-                      _mm256_loadu_ps(o + f));
-    const __m256 better = _mm256_cmp_ps(d, best, _CMP_GT_OQ);
-    best = _mm256_max_ps(d, best);  // == better ? d : best (no NaNs here)
-    // A bitwise select: GCC turns blendv with a compare mask into per-lane branches.
-    index = _mm256_or_ps(_mm256_and_ps(better, lane), _mm256_andnot_ps(better, index));
+    const __m256 d = planeDistance8(_mm256_loadu_ps(nx + f), _mm256_loadu_ps(ny + f),
+                                    _mm256_loadu_ps(nz + f), _mm256_loadu_ps(o + f), qx, qy, qz);
+    keepLargest(d, lane, best, index);
     lane = _mm256_add_ps(lane, eight);
     if (_mm256_movemask_ps(_mm256_cmp_ps(d, stop, _CMP_GT_OQ)) != 0) break;
   }
@@ -160,13 +175,9 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
   __m256 beyond = _mm256_setzero_ps();  // lanes with a plane farther than their stop
   for (std::size_t f = 0; f < count; ++f) {
     const __m256 d =
-        _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_broadcast_ss(nx + f), qx),
-                                                  _mm256_mul_ps(_mm256_broadcast_ss(ny + f), qy)),
-                                    _mm256_mul_ps(_mm256_broadcast_ss(nz + f), qz)),
-                      _mm256_broadcast_ss(o + f));
-    const __m256 better = _mm256_cmp_ps(d, best, _CMP_GT_OQ);
-    best = _mm256_max_ps(d, best);
-    index = _mm256_or_ps(_mm256_and_ps(better, plane), _mm256_andnot_ps(better, index));
+        planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
+                       _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
+    keepLargest(d, plane, best, index);
     plane = _mm256_add_ps(plane, one);
     // Once every lane has a plane beyond its stop, none of them can win: give up (the caller
     // sees a distance above the stop, as with maxPlaneDistance's early return).

@@ -192,7 +192,8 @@ void ConvexShape::buildEdges() {
     edgeDx_[e] = d.x();
     edgeDy_[e] = d.y();
     edgeDz_[e] = d.z();
-    edgeInvLen2_[e] = 1.0f / d.squaredNorm();
+    const float len2 = d.squaredNorm();
+    edgeInvLen2_[e] = len2 > 0.0f ? 1.0f / len2 : 0.0f;  // a point edge: its start
   }
 }
 
@@ -210,16 +211,16 @@ float ConvexShape::nearestEdge(const Vec3& p, int* edge, float* t) const {
   __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
   const __m128i four = _mm_set1_epi32(4);
   for (std::size_t e = 0; e < n; e += 4) {
-    const __m128 wx = _mm_sub_ps(px, _mm_load_ps(edgeAx_.data() + e));
-    const __m128 wy = _mm_sub_ps(py, _mm_load_ps(edgeAy_.data() + e));
-    const __m128 wz = _mm_sub_ps(pz, _mm_load_ps(edgeAz_.data() + e));
-    const __m128 dx = _mm_load_ps(edgeDx_.data() + e);
-    const __m128 dy = _mm_load_ps(edgeDy_.data() + e);
-    const __m128 dz = _mm_load_ps(edgeDz_.data() + e);
+    const __m128 wx = _mm_sub_ps(px, _mm_loadu_ps(edgeAx_.data() + e));
+    const __m128 wy = _mm_sub_ps(py, _mm_loadu_ps(edgeAy_.data() + e));
+    const __m128 wz = _mm_sub_ps(pz, _mm_loadu_ps(edgeAz_.data() + e));
+    const __m128 dx = _mm_loadu_ps(edgeDx_.data() + e);
+    const __m128 dy = _mm_loadu_ps(edgeDy_.data() + e);
+    const __m128 dz = _mm_loadu_ps(edgeDz_.data() + e);
     const __m128 along =
         _mm_add_ps(_mm_add_ps(_mm_mul_ps(wx, dx), _mm_mul_ps(wy, dy)), _mm_mul_ps(wz, dz));
     const __m128 s =
-        _mm_min_ps(_mm_max_ps(_mm_mul_ps(along, _mm_load_ps(edgeInvLen2_.data() + e)), zero), one);
+        _mm_min_ps(_mm_max_ps(_mm_mul_ps(along, _mm_loadu_ps(edgeInvLen2_.data() + e)), zero), one);
     const __m128 ex = _mm_sub_ps(wx, _mm_mul_ps(s, dx));
     const __m128 ey = _mm_sub_ps(wy, _mm_mul_ps(s, dy));
     const __m128 ez = _mm_sub_ps(wz, _mm_mul_ps(s, dz));

@@ -32,7 +32,8 @@ struct ErrorBreakdown {
 // CloudFrame::isFree or inFreeSpace below.
 using FreeSpaceTest = std::function<bool(const Vec3&)>;
 // nearestHints: optional, per point a body likely nearest (e.g. the simulation's last
-// mapping); it only speeds the queries up, the result is the same without it.
+// mapping); it only speeds the queries up, the result is the same without it. Not for
+// concurrent calls on one PosedBodies (its bulk queries keep scratch buffers).
 void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
                   const FreeSpaceTest& isFree, ErrorBreakdown& out,
                   std::span<const int> nearestHints = {});

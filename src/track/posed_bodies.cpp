@@ -510,6 +510,9 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
       }
     }
     first_[i] = first;
+    // No body to try (none at all, or the point or every pose is not finite): no hit, as the
+    // one-point queries answer.
+    if (first < 0) continue;
     tests_[static_cast<std::size_t>(first)].push_back(static_cast<int>(i));
   }
   runTests();

@@ -1,6 +1,7 @@
 #include "dynahand/tracker.h"
 
 #include <chrono>
+#include <cmath>
 
 #include "dynahand/hand_split.h"
 #include "dynahand/model_fit.h"
@@ -70,8 +71,9 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
     return Error{"pointSubsets must be 1..16"};
   // A negative band leaves no vertex near enough: the boundary planes would silently go.
   if (!(settings.boundaryBand >= 0.0f)) return Error{"boundaryBand must be >= 0 m"};
-  if (!(settings.pullForce >= 0.0f) || !(settings.acquisitionPullForce >= 0.0f))
-    return Error{"pullForce and acquisitionPullForce must be >= 0 N"};
+  for (const float pull : {settings.pullForce, settings.acquisitionPullForce})
+    if (!(pull >= 0.0f) || !std::isfinite(pull))
+      return Error{"pullForce and acquisitionPullForce must be finite and >= 0 N"};
   TrackerSettings s = settings;
   const float length = rightHand.metadata().referenceLength;
   const float referenceLength = model::HandDimensions{}.length;

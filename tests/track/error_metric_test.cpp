@@ -288,6 +288,49 @@ TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
   PosedBodies::useWidePlaneScan(true);
 }
 
+// The bulk queries at their edges: no points, no bodies, out-of-range hints, two identical
+// bodies (every distance a tie: the lower index wins) and a point that is not finite (no
+// crash, no hit on a real distance).
+TEST(PosedBodies, ManyPointsQueriesHandleEmptyInputTiesAndBadPoints) {
+  Scene s = randomScene(3);
+  for (const bool wide : {true, false}) {
+    PosedBodies::useWidePlaneScan(wide);
+    PosedBodies none;
+    none.set({}, {});
+    std::vector<int> hints(s.points.size(), -1);
+    std::vector<SurfaceHit> hits(s.points.size());
+    none.nearestPlanarMany(s.points, hints, hits);
+    for (const SurfaceHit& h : hits) EXPECT_EQ(h.body, -1);
+    none.nearestMany(s.points, hints, hits);
+    for (const SurfaceHit& h : hits) EXPECT_EQ(h.body, -1);
+
+    // Body 1 is body 0 again: every point ties, and body 0 must win whatever the hint.
+    std::vector<const physics::ConvexShape*> twins{s.shapePtrs[0], s.shapePtrs[0], s.shapePtrs[1]};
+    std::vector<Pose> twinPoses{s.poses[0], s.poses[0], s.poses[1]};
+    PosedBodies bodies;
+    bodies.set(twins, twinPoses);
+    std::vector<Vec3> points(s.points.begin(), s.points.begin() + 40);
+    points.push_back(Vec3(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.5f));
+    hints.assign(points.size(), 0);
+    for (std::size_t i = 0; i < hints.size(); ++i) hints[i] = static_cast<int>(i % 5) - 1;
+    const std::vector<int> given = hints;  // -1 .. 3: none, each body and one past the end
+    hits.resize(points.size());
+    std::vector<SurfaceHit> exactHits(points.size());
+    bodies.nearestPlanarMany(std::span(points.data(), 0), std::span(hints.data(), 0),
+                             std::span(hits.data(), 0));
+    bodies.nearestPlanarMany(points, hints, hits);
+    bodies.nearestMany(points, given, exactHits);
+    for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+      EXPECT_NE(hits[i].body, 1) << "a tie goes to the lower index";
+      EXPECT_NE(exactHits[i].body, 1);
+      EXPECT_EQ(hits[i].distance, bodies.nearestPlanar(points[i], kAllBodies, given[i]).distance);
+      EXPECT_EQ(exactHits[i].distance, bodies.nearest(points[i], kAllBodies, given[i]).distance);
+    }
+    EXPECT_FALSE(hits.back().distance < 0.06f) << "a NaN point attaches nowhere";
+  }
+  PosedBodies::useWidePlaneScan(true);
+}
+
 // The AVX plane scan (where the CPU has it) and the SSE one give the same bits.
 TEST(PosedBodies, WideAndNarrowPlaneScansAgreeBitForBit) {
   const bool wide = PosedBodies::useWidePlaneScan(true);

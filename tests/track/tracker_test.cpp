@@ -166,7 +166,8 @@ TEST(Tracker, RejectsBadSettings) {
     badBand.boundaryBand = band;  // no boundary row would be made
     EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badBand).ok());
   }
-  for (const float pull : {-1.0f, std::numeric_limits<float>::quiet_NaN()}) {
+  for (const float pull :
+       {-1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
     TrackerSettings badPull;
     badPull.pullForce = pull;  // a negative cap: rows whose impulse range is empty
     EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badPull).ok());

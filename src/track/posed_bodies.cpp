@@ -45,6 +45,18 @@ __attribute__((target("avx"), always_inline)) inline __m256 planeDistance8(__m25
                        o);
 }
 
+// |p - c| - r lane by lane (sphereGap's arithmetic: x^2 + (y^2 + z^2), Eigen's order for a
+// 3-vector's squared norm, so the scalar paths give the same bits).
+__attribute__((target("avx"), always_inline)) inline __m256 sphereGap8(__m256 px, __m256 py,
+                                                                       __m256 pz, __m256 cx,
+                                                                       __m256 cy, __m256 cz,
+                                                                       __m256 r) {
+  const __m256 dx = _mm256_sub_ps(px, cx), dy = _mm256_sub_ps(py, cy), dz = _mm256_sub_ps(pz, cz);
+  const __m256 d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx),
+                                  _mm256_add_ps(_mm256_mul_ps(dy, dy), _mm256_mul_ps(dz, dz)));
+  return _mm256_sub_ps(_mm256_sqrt_ps(d2), r);
+}
+
 // Each lane's largest distance so far and the index of the first plane holding it.
 __attribute__((target("avx"), always_inline)) inline void keepLargest(__m256 d, __m256 at,
                                                                       __m256& best, __m256& index) {
@@ -108,15 +120,10 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
   const int blocks = (count + 7) / 8;
   for (int b = 0; b < blocks; ++b) {
     const int o = 8 * b;
-    const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(cx + o));
-    const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(cy + o));
-    const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(cz + o));
-    // x^2 + (y^2 + z^2): Eigen's order for a 3-vector's squaredNorm, so the bounds are the
-    // scalar path's bits.
-    const __m256 d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx),
-                                    _mm256_add_ps(_mm256_mul_ps(dy, dy), _mm256_mul_ps(dz, dz)));
     const __m256 bound =
-        _mm256_max_ps(_mm256_sub_ps(_mm256_sqrt_ps(d2), _mm256_loadu_ps(r + o)), zero);
+        _mm256_max_ps(sphereGap8(px, py, pz, _mm256_loadu_ps(cx + o), _mm256_loadu_ps(cy + o),
+                                 _mm256_loadu_ps(cz + o), _mm256_loadu_ps(r + o)),
+                      zero);
     _mm256_storeu_ps(bounds + o, bound);
     smallest = _mm256_min_ps(smallest, bound);
   }
@@ -197,12 +204,9 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
 __attribute__((target("avx"))) int reachableEightAvx(const float* px, const float* py,
                                                      const float* pz, const float* best, float cx,
                                                      float cy, float cz, float r) {
-  const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(px), _mm256_set1_ps(cx));
-  const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(py), _mm256_set1_ps(cy));
-  const __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(pz), _mm256_set1_ps(cz));
-  const __m256 d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx),
-                                  _mm256_add_ps(_mm256_mul_ps(dy, dy), _mm256_mul_ps(dz, dz)));
-  const __m256 gap = _mm256_sub_ps(_mm256_sqrt_ps(d2), _mm256_set1_ps(r));
+  const __m256 gap =
+      sphereGap8(_mm256_loadu_ps(px), _mm256_loadu_ps(py), _mm256_loadu_ps(pz), _mm256_set1_ps(cx),
+                 _mm256_set1_ps(cy), _mm256_set1_ps(cz), _mm256_set1_ps(r));
   return _mm256_movemask_ps(_mm256_cmp_ps(gap, _mm256_loadu_ps(best), _CMP_LE_OQ));
 }
 
@@ -291,6 +295,14 @@ SurfaceHit PosedBodies::planarHit(std::size_t body, const Vec3& p, const Vec3& l
   const float d = sd < 0.0f ? -sd : std::max(sd, sphereGap(body, p));
   const auto& f = shapes_[body]->faces()[static_cast<std::size_t>(face)];
   return {static_cast<int>(body), face, d, sd, local - f.normal * sd};
+}
+
+SurfaceHit PosedBodies::exactHit(std::size_t body, const Vec3& local, float planeDist,
+                                 int planeFace) const {
+  Vec3 closest;
+  int face = -1;
+  const float sd = shapes_[body]->queryFromPlane(local, planeDist, planeFace, &closest, &face);
+  return {static_cast<int>(body), face, std::abs(sd), sd, closest};
 }
 
 bool PosedBodies::useWidePlaneScan(bool enabled) {
@@ -477,17 +489,8 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
           if (sd > stop[k]) continue;
           const auto i = static_cast<std::size_t>(list[start + k]);
           const Vec3 local(lx[k], ly[k], lz[k]);
-          SurfaceHit hit;
-          if (exact) {
-            Vec3 closest;
-            int closestFace = -1;
-            const float signedDistance =
-                shapes_[b]->queryFromPlane(local, sd, face[k], &closest, &closestFace);
-            hit = {static_cast<int>(b), closestFace, std::abs(signedDistance), signedDistance,
-                   closest};
-          } else {
-            hit = planarHit(b, points[i], local, face[k], sd);
-          }
+          const SurfaceHit hit =
+              exact ? exactHit(b, local, sd, face[k]) : planarHit(b, points[i], local, face[k], sd);
           if (beats(hit, hits[i])) {
             hits[i] = hit;
             bestDistance_[i] = hit.distance;
@@ -553,7 +556,7 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {
     for (int i = 0; i < size(); ++i) {
       if (!(mask >> i & 1u)) continue;
       const auto bi = static_cast<std::size_t>(i);
-      bounds[bi] = std::max(0.0f, (p - worldCentroid(i)).norm() - sphereR_[bi]);
+      bounds[bi] = std::max(0.0f, sphereGap(bi, p));
       if (first < 0 || bounds[bi] < bounds[static_cast<std::size_t>(first)]) first = i;
     }
   SurfaceHit best;
@@ -561,19 +564,14 @@ SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {
   auto test = [&](int i) {
     const auto bi = static_cast<std::size_t>(i);
     if (bounds[bi] > best.distance) return;
-    const Vec3 local = poses_[bi].inverseTransform(p);
+    const Vec3 local = toLocal(bi, p);
     int planeFace = 0;
     // Outside, the exact distance is at least the largest plane distance. Not above the
     // best, the scan ran over every plane: its maximum is the one query() would find.
     const float planeDist = maxPlaneDistance(planes_[bi], local, &planeFace, best.distance);
     if (planeDist > best.distance) return;
-    Vec3 closest;
-    int face = -1;
-    const float sd = shapes_[bi]->queryFromPlane(local, planeDist, planeFace, &closest, &face);
-    const float d = std::abs(sd);
-    if (d < best.distance || (d == best.distance && i < best.body)) {
-      best = {i, face, d, sd, closest};
-    }
+    const SurfaceHit hit = exactHit(bi, local, planeDist, planeFace);
+    if (beats(hit, best)) best = hit;
   };
   if (first < 0) return best;
   if (hint < 0 || hint >= size() || !(mask >> hint & 1u)) hint = first;

@@ -94,6 +94,8 @@ class PosedBodies {
   // max(sd, sphereGap); `face` and `sd` from the plane scan.
   SurfaceHit planarHit(std::size_t body, const Vec3& p, const Vec3& local, int face,
                        float sd) const;
+  // The exact answer for body i from its largest plane distance and that plane's face.
+  SurfaceHit exactHit(std::size_t body, const Vec3& local, float planeDist, int planeFace) const;
 
   std::vector<const physics::ConvexShape*> shapes_;
   std::vector<const physics::ConvexShape*> tableShapes_;  // shapes the tables were built for

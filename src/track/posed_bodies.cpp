@@ -141,6 +141,32 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
   return m;
 }
 
+// toLocal, eight points at once (one per lane), operation for operation: the same bits.
+__attribute__((target("avx"), always_inline)) inline void toLocal8(const Quat& rotation,
+                                                                   const Vec3& t, __m256 px,
+                                                                   __m256 py, __m256 pz,
+                                                                   __m256& qx, __m256& qy,
+                                                                   __m256& qz) {
+  const __m256 w = _mm256_set1_ps(rotation.w());
+  const __m256 ux = _mm256_set1_ps(-rotation.x()), uy = _mm256_set1_ps(-rotation.y()),
+               uz = _mm256_set1_ps(-rotation.z());
+  const __m256 dx = _mm256_sub_ps(px, _mm256_set1_ps(t.x()));
+  const __m256 dy = _mm256_sub_ps(py, _mm256_set1_ps(t.y()));
+  const __m256 dz = _mm256_sub_ps(pz, _mm256_set1_ps(t.z()));
+  __m256 cx = _mm256_sub_ps(_mm256_mul_ps(uy, dz), _mm256_mul_ps(uz, dy));
+  __m256 cy = _mm256_sub_ps(_mm256_mul_ps(uz, dx), _mm256_mul_ps(ux, dz));
+  __m256 cz = _mm256_sub_ps(_mm256_mul_ps(ux, dy), _mm256_mul_ps(uy, dx));
+  cx = _mm256_add_ps(cx, cx);
+  cy = _mm256_add_ps(cy, cy);
+  cz = _mm256_add_ps(cz, cz);
+  qx = _mm256_add_ps(_mm256_add_ps(dx, _mm256_mul_ps(w, cx)),
+                     _mm256_sub_ps(_mm256_mul_ps(uy, cz), _mm256_mul_ps(uz, cy)));
+  qy = _mm256_add_ps(_mm256_add_ps(dy, _mm256_mul_ps(w, cy)),
+                     _mm256_sub_ps(_mm256_mul_ps(uz, cx), _mm256_mul_ps(ux, cz)));
+  qz = _mm256_add_ps(_mm256_add_ps(dz, _mm256_mul_ps(w, cz)),
+                     _mm256_sub_ps(_mm256_mul_ps(ux, cy), _mm256_mul_ps(uy, cx)));
+}
+
 // Eight points at once (one per lane), for one body: the points in the body frame (toLocal's
 // arithmetic), each one's largest plane distance and its face, lowest index on ties
 // (maxPlaneDistance's answer: the first plane holding a lane's maximum). Stops early once
@@ -152,25 +178,8 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
                                                  const float* o, std::size_t count,
                                                  const float* stop, float* lx, float* ly, float* lz,
                                                  float* largest, std::int32_t* face) {
-  // toLocal, eight lanes at once, operation for operation.
-  const __m256 w = _mm256_set1_ps(rotation.w());
-  const __m256 ux = _mm256_set1_ps(-rotation.x()), uy = _mm256_set1_ps(-rotation.y()),
-               uz = _mm256_set1_ps(-rotation.z());
-  const __m256 dx = _mm256_sub_ps(_mm256_load_ps(wx), _mm256_set1_ps(t.x()));
-  const __m256 dy = _mm256_sub_ps(_mm256_load_ps(wy), _mm256_set1_ps(t.y()));
-  const __m256 dz = _mm256_sub_ps(_mm256_load_ps(wz), _mm256_set1_ps(t.z()));
-  __m256 cx = _mm256_sub_ps(_mm256_mul_ps(uy, dz), _mm256_mul_ps(uz, dy));
-  __m256 cy = _mm256_sub_ps(_mm256_mul_ps(uz, dx), _mm256_mul_ps(ux, dz));
-  __m256 cz = _mm256_sub_ps(_mm256_mul_ps(ux, dy), _mm256_mul_ps(uy, dx));
-  cx = _mm256_add_ps(cx, cx);
-  cy = _mm256_add_ps(cy, cy);
-  cz = _mm256_add_ps(cz, cz);
-  const __m256 qx = _mm256_add_ps(_mm256_add_ps(dx, _mm256_mul_ps(w, cx)),
-                                  _mm256_sub_ps(_mm256_mul_ps(uy, cz), _mm256_mul_ps(uz, cy)));
-  const __m256 qy = _mm256_add_ps(_mm256_add_ps(dy, _mm256_mul_ps(w, cy)),
-                                  _mm256_sub_ps(_mm256_mul_ps(uz, cx), _mm256_mul_ps(ux, cz)));
-  const __m256 qz = _mm256_add_ps(_mm256_add_ps(dz, _mm256_mul_ps(w, cz)),
-                                  _mm256_sub_ps(_mm256_mul_ps(ux, cy), _mm256_mul_ps(uy, cx)));
+  __m256 qx, qy, qz;
+  toLocal8(rotation, t, _mm256_load_ps(wx), _mm256_load_ps(wy), _mm256_load_ps(wz), qx, qy, qz);
   _mm256_store_ps(lx, qx);
   _mm256_store_ps(ly, qy);
   _mm256_store_ps(lz, qz);
@@ -199,15 +208,19 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
   for (int k = 0; k < 8; ++k) face[k] = static_cast<std::int32_t>(indexOut[k]);
 }
 
-// Per lane of eight points: whether body (centre c, radius r) could still beat or tie the
-// best so far, i.e. not sphereGap > best (sphereGap's arithmetic). A mask of 8 bits.
+// Per lane of eight points: whether body b (centre c, radius r) could still beat or tie the
+// best so far, i.e. not sphereGap > best (sphereGap's arithmetic), and is not the body the
+// point was tested against first (`first`, as floats). A mask of 8 bits.
 __attribute__((target("avx"))) int reachableEightAvx(const float* px, const float* py,
-                                                     const float* pz, const float* best, float cx,
+                                                     const float* pz, const float* best,
+                                                     const float* first, float b, float cx,
                                                      float cy, float cz, float r) {
   const __m256 gap =
       sphereGap8(_mm256_loadu_ps(px), _mm256_loadu_ps(py), _mm256_loadu_ps(pz), _mm256_set1_ps(cx),
                  _mm256_set1_ps(cy), _mm256_set1_ps(cz), _mm256_set1_ps(r));
-  return _mm256_movemask_ps(_mm256_cmp_ps(gap, _mm256_loadu_ps(best), _CMP_LE_OQ));
+  const __m256 reachable = _mm256_cmp_ps(gap, _mm256_loadu_ps(best), _CMP_LE_OQ);
+  const __m256 other = _mm256_cmp_ps(_mm256_loadu_ps(first), _mm256_set1_ps(b), _CMP_NEQ_UQ);
+  return _mm256_movemask_ps(_mm256_and_ps(reachable, other));
 }
 
 // Static initialisers may run before the library's own CPU detection: run it first.
@@ -450,7 +463,7 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
   px_.resize(padded);
   py_.resize(padded);
   pz_.resize(padded);
-  first_.resize(n);
+  first_.assign(padded, -1.0f);
   bestDistance_.assign(padded, std::numeric_limits<float>::infinity());
   for (std::size_t i = 0; i < padded; ++i) {
     const Vec3& p = points[std::min(i, n - 1)];
@@ -459,8 +472,11 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
     pz_[i] = p.z();
   }
   for (SurfaceHit& h : hits) h = SurfaceHit{-1, -1, std::numeric_limits<float>::infinity()};
-  tests_.resize(bodyCount);
-  for (auto& t : tests_) t.clear();
+  // Each body's list of points to test: row b of a (bodies x padded) table (a list never
+  // holds more than the n points, and the branch-free appends below write at most seven
+  // entries past its end, still inside the row).
+  tests_.resize(bodyCount * padded);
+  testCount_.assign(bodyCount, 0);
   if (n == 0) return;
 
   // Tests every point listed for each body, eight per scan, keeping each point's least
@@ -469,11 +485,12 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
     alignas(32) float wx[8], wy[8], wz[8], lx[8], ly[8], lz[8], stop[8], largest[8];
     alignas(32) std::int32_t face[8];
     for (std::size_t b = 0; b < bodyCount; ++b) {
-      const auto& list = tests_[b];
+      const int* list = tests_.data() + b * padded;
+      const auto count = static_cast<std::size_t>(testCount_[b]);
       const PlaneTable& table = planes_[b];
       const std::size_t planes = shapes_[b]->faces().size();
-      for (std::size_t start = 0; start < list.size(); start += 8) {
-        const std::size_t lanes = std::min<std::size_t>(8, list.size() - start);
+      for (std::size_t start = 0; start < count; start += 8) {
+        const std::size_t lanes = std::min<std::size_t>(8, count - start);
         for (std::size_t k = 0; k < 8; ++k) {
           const auto i = static_cast<std::size_t>(list[start + std::min(k, lanes - 1)]);
           wx[k] = px_[i];
@@ -512,30 +529,35 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
         }
       }
     }
-    first_[i] = first;
     // No body to try (none at all, or the point or every pose is not finite): no hit, as the
     // one-point queries answer.
     if (first < 0) continue;
-    tests_[static_cast<std::size_t>(first)].push_back(static_cast<int>(i));
+    first_[i] = static_cast<float>(first);
+    const auto b = static_cast<std::size_t>(first);
+    tests_[b * padded + static_cast<std::size_t>(testCount_[b]++)] = static_cast<int>(i);
   }
   runTests();
-  for (auto& t : tests_) t.clear();
   // Then every other body whose sphere could still beat or tie a point's best (a tie goes to
   // the lower index, as in the one-point queries; testing a body that cannot win changes
   // nothing). The sphere gap is a lower bound on both the planar and the exact distance.
+  // Appended without branches: every lane's index is written, the count advances by the
+  // lane's bit (the reachable lanes are unpredictable).
+  const int lastLanes = (1 << (n - (padded - 8))) - 1;  // the real points of the last eight
   for (std::size_t b = 0; b < bodyCount; ++b) {
-    for (std::size_t start = 0; start < n; start += 8) {
+    int* list = tests_.data() + b * padded;
+    int count = 0;
+    for (std::size_t start = 0; start < padded; start += 8) {
       int mask = reachableEightAvx(px_.data() + start, py_.data() + start, pz_.data() + start,
-                                   bestDistance_.data() + start, sphereX_[b], sphereY_[b],
-                                   sphereZ_[b], sphereR_[b]);
-      while (mask != 0) {
-        const int k = __builtin_ctz(static_cast<unsigned>(mask));
-        mask &= mask - 1;
-        const std::size_t i = start + static_cast<std::size_t>(k);
-        if (i >= n || first_[i] == static_cast<int>(b)) continue;
-        tests_[b].push_back(static_cast<int>(i));
+                                   bestDistance_.data() + start, first_.data() + start,
+                                   static_cast<float>(b), sphereX_[b], sphereY_[b], sphereZ_[b],
+                                   sphereR_[b]);
+      if (start + 8 == padded) mask &= lastLanes;
+      for (int k = 0; k < 8; ++k) {
+        list[count] = static_cast<int>(start) + k;
+        count += mask >> k & 1;
       }
     }
+    testCount_[b] = count;
   }
   runTests();
 #endif

@@ -110,11 +110,13 @@ class PosedBodies {
 
   void nearestMany(std::span<const Vec3> points, std::span<const int> hints,
                    std::span<SurfaceHit> hits, bool exact) const;
-  // The bulk queries' scratch: the points as SoA, each point's first body, per body the points
-  // to test, each point's best so far.
+  // The bulk queries' scratch: the points as SoA, each point's first body (as a float, for
+  // eight-wide compares; -1 for none), per body the points to test (a row of tests_ each) and
+  // their count, each point's best so far.
   mutable std::vector<float> px_, py_, pz_;
-  mutable std::vector<int> first_;
-  mutable std::vector<std::vector<int>> tests_;
+  mutable std::vector<float> first_;
+  mutable std::vector<int> tests_;
+  mutable std::vector<int> testCount_;
   mutable std::vector<float> bestDistance_;
 };
 

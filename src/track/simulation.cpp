@@ -36,11 +36,18 @@ void Simulator::beginFrame(const Simulator* shared) {
   frameStartPoints_ = nullptr;
   shared_ = shared;
   pass_ = 0;
+  // The sample points are new every frame: last frame's bodies are no guide, the shared
+  // mapping's (at this frame's start poses) are.
+  if (shared != nullptr) hints_ = shared->hints_;
 }
 
 void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
   beginFrame();
   pose(rig, bodies_);
+  // The other subsets first, only for their nearest bodies: the simulations sharing this
+  // mapping start their own from there (a body found at the start poses is close to the
+  // answer a substep later, which makes the bulk query cull more).
+  for (int subset = 1; subset < settings_.pointSubsets; ++subset) mapPoints(rig, input, subset);
   mapPoints(rig, input, 0);  // every simulation's first substep uses subset 0
   frameStart_ = attachments_;
   frameStartSubset_ = 0;

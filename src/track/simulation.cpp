@@ -1,6 +1,7 @@
 #include "track/simulation.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "track/silhouette.h"
 
@@ -41,9 +42,38 @@ void Simulator::beginFrame(const Simulator* shared) {
   if (shared != nullptr) hints_ = shared->hints_;
 }
 
+int Simulator::labelCell(const Intrinsics& k, const Vec3& p) const {
+  if (!(p.z() > 0.0f)) return -1;
+  const Vec2 pixel = k.project(p);
+  const float u = pixel.x() * labelScale_, v = pixel.y() * labelScale_;
+  if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(labelColumns_) &&
+        v < static_cast<float>(labelRows_)))
+    return -1;
+  return static_cast<int>(v) * labelColumns_ + static_cast<int>(u);
+}
+
 void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
   beginFrame();
   pose(rig, bodies_);
+  // Last frame's nearest bodies, looked up by pixel: a good first guess for this frame's new
+  // points (the answers do not depend on it; the bulk query only culls more).
+  const CloudFrame* cloud = input.cloud;
+  if (cloud != nullptr) {
+    const Intrinsics& k = cloud->intrinsics;
+    labelScale_ = kLabelColumns / static_cast<float>(std::max(k.width, 1));
+    const int rows = static_cast<int>(std::ceil(static_cast<float>(k.height) * labelScale_));
+    if (labelColumns_ != kLabelColumns || labelRows_ != rows) {
+      labelColumns_ = kLabelColumns;
+      labelRows_ = rows;
+      labels_.assign(static_cast<std::size_t>(labelColumns_ * labelRows_), -1);
+    }
+    hints_.resize(input.points.size());
+    for (std::size_t i = 0; i < input.points.size(); ++i) {
+      const int cell = labelCell(k, input.points[i]);
+      if (cell >= 0 && labels_[static_cast<std::size_t>(cell)] >= 0)
+        hints_[i] = labels_[static_cast<std::size_t>(cell)];
+    }
+  }
   // The other subsets first, only for their nearest bodies: the simulations sharing this
   // mapping start their own from there (a body found at the start poses is close to the
   // answer a substep later, which makes the bulk query cull more).
@@ -53,6 +83,13 @@ void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
   frameStartSubset_ = 0;
   frameStartPoses_ = poses_;
   frameStartPoints_ = input.points.data();
+  if (cloud != nullptr) {
+    std::fill(labels_.begin(), labels_.end(), -1);
+    for (std::size_t i = 0; i < input.points.size(); ++i) {
+      const int cell = labelCell(cloud->intrinsics, input.points[i]);
+      if (cell >= 0) labels_[static_cast<std::size_t>(cell)] = static_cast<std::int8_t>(hints_[i]);
+    }
+  }
 }
 
 Simulator::Attachment Simulator::map(const HandRig& rig, const Vec3& p, BodyMask mask,

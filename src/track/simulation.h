@@ -5,6 +5,7 @@
 // physics world (joints, limits, collisions and prior motion are the world's own).
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -114,6 +115,13 @@ class Simulator {
   std::vector<Pose> frameStartPoses_;
   const Vec3* frameStartPoints_ = nullptr;
   const Simulator* shared_ = nullptr;  // whose frame-start mapping to use (see beginFrame)
+  // The frame-start mapping's nearest bodies on a coarse pixel grid (kLabelColumns across the
+  // image, -1: none), the next frame's first guesses (mapFrameStart).
+  static constexpr int kLabelColumns = 80;
+  int labelCell(const Intrinsics& k, const Vec3& p) const;  // -1 outside the grid
+  std::vector<std::int8_t> labels_;
+  int labelColumns_ = 0, labelRows_ = 0;
+  float labelScale_ = 0.0f;  // grid cells per pixel
   int pass_ = 0;                       // substeps since beginFrame: picks the point subset
 };
 

@@ -26,6 +26,17 @@ constexpr float kLimbRadiusFactor = 2.0f;
 // A ball moved toward a limb's free end stops with the end this far (in hand radii) from
 // its centre.
 constexpr float kEndInsideBall = 0.75f;
+// Pieces of a hand broken up by missing data (fingers seen edge-on by a structured-light
+// camera), in metres: taken together as one volume when at most kPieceDepthM behind the nearest
+// of them (the depth of a hand seen edge-on, fingers curled); joining a volume taken when at
+// most kPieceFrontM in front of its nearest point (a finger held out towards the camera; a
+// speck farther in front is something else) and kFragmentDepthM behind it (about level).
+constexpr float kPieceDepthM = 0.06f;
+constexpr float kPieceFrontM = 0.15f;
+constexpr float kFragmentDepthM = 0.02f;
+// Pieces smaller than this share of minAreaM2 are specks (flying pixels, noise): no part of
+// anything.
+constexpr float kFragmentMinShare = 0.05f;
 
 // Nearest integer for x >= -0.5 (pixel coordinates), without a libm call.
 int roundToInt(float x) {
@@ -59,6 +70,22 @@ struct CloudPipeline::Impl {
   std::vector<float> boxColumnX;         // (box width) x / z of each box column
   std::vector<VoxelGrid::Key> rowKeys;   // (box width) voxel of each sample of a row
   std::vector<int> columnVoxel;          // (box width) voxel of the last run over each column
+  // The fine pass's pieces passed over as too small: the region and its cells (a range of
+  // fragmentCells), to join the volume taken when they lie within its ball.
+  struct Fragment {
+    GrownRegion region;
+    std::size_t begin, end;
+  };
+  // Whether piece f joins a volume whose nearest point is `nearest`: not a speck, within the
+  // hand's ball, at most kPieceFrontM in front of that point and `behindM` behind it.
+  bool joins(const Fragment& f, const Vec3& nearest, float behindM) const {
+    const float dz = f.region.nearestPoint.z() - nearest.z();
+    return f.region.areaM2 >= kFragmentMinShare * config.segmentation.minAreaM2 &&
+           (f.region.nearestPoint - nearest).norm() <= config.segmentation.handRadiusM &&
+           dz >= -kPieceFrontM && dz <= behindM;
+  }
+  std::vector<Fragment> fragments;
+  std::vector<std::int32_t> fragmentCells;
 
   Impl(const Intrinsics& intrinsics, const CloudConfig& cfg)
       : k(intrinsics), config(cfg), voxels(cfg.voxelSizeM, cfg.maxVoxels) {}
@@ -379,6 +406,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       fine.originV = box.y0;
       fine.step = segmentStride;
       fineGrower.reset(fine, k);
+      fragments.clear();
+      fragmentCells.clear();
       fineFound[0] = fineFound[1] = false;
       // The coarse pass accepted these volumes; at full resolution a filtered speck may still
       // be nearest (e.g. a fingertip in front of the palm), so small regions are skipped too.
@@ -417,8 +446,66 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
             fineGrower.accept(static_cast<CellLabel>(label));
             fineRegion[r] = g;
             fineFound[r] = true;
+            // Pieces passed over as too small that lie within this volume's ball, in front
+            // of it or about as near: a hand broken up by missing data (fingers seen edge-on
+            // with a structured-light camera), whose pieces belong to it.
+            if (r == 0 && !twoRegions) {
+              for (const Fragment& f : fragments) {
+                if (!joins(f, g.nearestPoint, kFragmentDepthM)) continue;
+                fineGrower.labelCells(fragmentCells.data() + f.begin, f.end - f.begin,
+                                      static_cast<CellLabel>(label));
+                // Its cells count for the box too: a piece cut by the box widens it.
+                GrownRegion& taken = fineRegion[r];
+                taken.areaM2 += f.region.areaM2;
+                taken.minI = std::min(taken.minI, f.region.minI);
+                taken.maxI = std::max(taken.maxI, f.region.maxI);
+                taken.minJ = std::min(taken.minJ, f.region.minJ);
+                taken.maxJ = std::max(taken.maxJ, f.region.maxJ);
+              }
+            }
           } else {
+            const bool piece = r == 0 && !twoRegions && !g.inFrontOfSurface;
+            if (piece) {
+              Fragment f{g, fragmentCells.size(), 0};
+              fineGrower.appendLastRegion(fragmentCells);
+              f.end = fragmentCells.size();
+              fragments.push_back(f);
+            }
             fineGrower.reject();
+            // Pieces that together make a volume (the nearest of them and those within its
+            // ball, at most kPieceDepthM behind it) are taken as one: the hand seen edge-on
+            // in missing data, which would otherwise lose to a forearm or body behind it.
+            if (piece) {
+              const Fragment* lead = nullptr;
+              for (const Fragment& f : fragments)
+                if (f.region.areaM2 >= kFragmentMinShare * seg.minAreaM2) {
+                  lead = &f;
+                  break;
+                }
+              float area = 0.0f;
+              if (lead != nullptr)
+                for (const Fragment& f : fragments)
+                  if (joins(f, lead->region.nearestPoint, kPieceDepthM)) area += f.region.areaM2;
+              if (area >= seg.minAreaM2) {
+                GrownRegion merged = lead->region;
+                merged.areaM2 = 0.0f;
+                merged.cellCount = 0;
+                merged.cutCount = 0;  // no cut: no arm direction from pieces
+                for (const Fragment& f : fragments) {
+                  if (!joins(f, lead->region.nearestPoint, kPieceDepthM)) continue;
+                  fineGrower.labelCells(fragmentCells.data() + f.begin, f.end - f.begin,
+                                        static_cast<CellLabel>(label));
+                  merged.areaM2 += f.region.areaM2;
+                  merged.cellCount += f.region.cellCount;
+                  merged.minI = std::min(merged.minI, f.region.minI);
+                  merged.maxI = std::max(merged.maxI, f.region.maxI);
+                  merged.minJ = std::min(merged.minJ, f.region.minJ);
+                  merged.maxJ = std::max(merged.maxJ, f.region.maxJ);
+                }
+                fineRegion[r] = merged;
+                fineFound[r] = true;
+              }
+            }
           }
         }
       }

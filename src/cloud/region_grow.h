@@ -101,6 +101,14 @@ class RegionGrower {
   void accept(CellLabel region);
   // Labels the last grown region kTried (its seed is not tried again).
   void reject();
+  // Appends the last grown region's cells (packed j << 16 | i) to `out`.
+  void appendLastRegion(std::vector<std::int32_t>& out) const {
+    out.insert(out.end(), queue_.begin(), queue_.begin() + regionEnd_);
+  }
+  // Labels the given cells (packed, from appendLastRegion) `region`.
+  void labelCells(const std::int32_t* packed, std::size_t count, CellLabel region) {
+    for (std::size_t q = 0; q < count; ++q) labels_[cellOf(packed[q])] = region;
+  }
   // Turns all accepted regions into kTried and frees their cut cells.
   void retireAccepted();
 

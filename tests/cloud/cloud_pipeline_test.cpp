@@ -100,6 +100,58 @@ TEST(CloudPipeline, SpecksSmallerThanTheMinimumAreaAreSkipped) {
   EXPECT_GE(out.segment.areaM2, pipeline.config().segmentation.minAreaM2);
 }
 
+// A hand broken up by missing data (fingers seen edge-on by a structured-light camera): small
+// pieces in front of the volume taken, within its ball, belong to it; a speck does not.
+TEST(CloudPipeline, PiecesInFrontOfTheVolumeTakenJoinIt) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  std::vector<Sphere> spheres = disc(Vec3(0.0f, 0.03f, 0.55f), 0.05f);  // the palm
+  const Vec3 pieceA(-0.03f, -0.055f, 0.52f), pieceB(0.03f, -0.055f, 0.51f);
+  spheres.push_back({pieceA, 0.012f});  // about 4.5 cm^2 each: under minAreaM2 alone
+  spheres.push_back({pieceB, 0.012f});
+  const Vec3 speck(0.07f, -0.03f, 0.5f);
+  spheres.push_back({speck, 0.003f});  // 0.3 cm^2: noise
+  const DepthFrame frame = cloud::scenes::render(k, spheres, 1.0f);
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  EXPECT_GT(out.segment.nearestPoint.z(), 0.52f);  // the palm was the volume taken
+  EXPECT_TRUE(maskAt(out, Vec3(0.0f, 0.03f, 0.54f)));
+  EXPECT_TRUE(maskAt(out, pieceA));
+  EXPECT_TRUE(maskAt(out, pieceB));
+  EXPECT_FALSE(maskAt(out, speck));
+  int nearPieces = 0;
+  for (const Vec3& p : out.points) nearPieces += (p - pieceA).norm() < 0.015f;
+  EXPECT_GT(nearPieces, 0) << "the pieces' samples are in the cloud";
+}
+
+// Pieces each under minAreaM2 that together make one (a hand seen edge-on, broken up) are
+// taken before a larger surface farther behind (the forearm), which would otherwise win.
+TEST(CloudPipeline, AHandInPiecesIsTakenBeforeALargerSurfaceBehindIt) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  std::vector<Sphere> spheres;
+  cloud::scenes::addCapsule(spheres, Vec3(0.0f, 0.02f, 0.68f), Vec3(0.0f, 0.2f, 0.7f), 0.05f,
+                            0.01f);  // the forearm, across the image's lower half
+  const std::vector<Vec3> pieces = {
+      Vec3(-0.05f, -0.02f, 0.50f), Vec3(0.0f, -0.03f, 0.51f), Vec3(0.05f, -0.02f, 0.52f)};
+  for (const Vec3& c : pieces) spheres.push_back({c, 0.02f});  // about 12 cm^2 each
+  const DepthFrame frame = cloud::scenes::render(k, spheres, 0.0f);
+  CloudPipeline pipeline(k);
+  const float minArea = pipeline.config().segmentation.minAreaM2;
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  EXPECT_LT(out.segment.nearestPoint.z(), 0.5f);
+  for (const Vec3& c : pieces) EXPECT_TRUE(maskAt(out, c - Vec3(0.0f, 0.0f, 0.02f)));
+  EXPECT_FALSE(maskAt(out, Vec3(0.0f, 0.12f, 0.66f)));
+  EXPECT_GE(out.segment.areaM2, minArea);
+  // Each piece alone is under the minimum: only together are they a volume.
+  CloudFrame one;
+  const DepthFrame single = cloud::scenes::render(k, {{pieces[1], 0.02f}}, 0.0f);
+  ASSERT_TRUE(pipeline.process(single, one).ok());
+  EXPECT_FALSE(one.segment.found);
+}
+
 TEST(CloudPipeline, RangeGateIgnoresObjectsTooClose) {
   const Intrinsics k = cloud::scenes::camera(320, 240);
   std::vector<Sphere> spheres = disc(Vec3(0.0f, 0.0f, 0.6f), 0.06f);

@@ -88,8 +88,20 @@ struct CloudPipeline::Impl {
   std::vector<std::int32_t> fragmentCells;
 
   Impl(const Intrinsics& intrinsics, const CloudConfig& cfg)
-      : k(intrinsics), config(cfg), voxels(cfg.voxelSizeM, cfg.maxVoxels) {}
+      : k(intrinsics), config(cfg), voxels(cfg.voxelSizeM, cfg.maxVoxels) {
+    // At most one piece per seed attempt, and a fine grid's cells once (more are not kept).
+    fragments.reserve(static_cast<std::size_t>(std::max(1, cfg.segmentation.maxSeedAttempts)));
+    fragmentCells.reserve(static_cast<std::size_t>(intrinsics.width) *
+                          static_cast<std::size_t>(std::max(0, intrinsics.height)));
+  }
 
+  // The pieces skipped so far (fragments) that make a volume together: the nearest one that
+  // is not a speck and those joining it (joins, kPieceDepthM behind at most), their cells
+  // within its ball, each counted once, reaching minAreaM2. Labels them `label` in fineGrower
+  // and writes their region (no cut: no arm direction); false, labels unchanged, otherwise.
+  // The hand seen edge-on in missing data, which would otherwise lose to a forearm or body
+  // behind it.
+  bool mergePieces(CellLabel label, GrownRegion& region);
   void sampleCoarse(const DepthFrame& frame, DepthGrid& grid);
   // True when the coarse region's cell box reaches within borderMarginPixels of the
   // image border.
@@ -204,6 +216,50 @@ Status CloudPipeline::process(const DepthFrame& frame, CloudFrame& out) {
                  " is not a positive number of metres per unit"};
   }
   return impl_->run(frame, out);
+}
+
+bool CloudPipeline::Impl::mergePieces(CellLabel label, GrownRegion& region) {
+  const SegmentationConfig& seg = config.segmentation;
+  const auto lead = std::find_if(fragments.begin(), fragments.end(), [&](const Fragment& f) {
+    return f.region.areaM2 >= kFragmentMinShare * seg.minAreaM2;
+  });
+  if (lead == fragments.end()) return false;
+  const Vec3 centre = lead->region.nearestPoint;
+  float estimate = 0.0f;  // pieces may overlap: an upper bound
+  for (const Fragment& f : fragments)
+    if (joins(f, centre, kPieceDepthM)) estimate += f.region.areaM2;
+  if (estimate < seg.minAreaM2) return false;
+  auto relabel = [&](CellLabel to) {
+    float area = 0.0f;
+    for (const Fragment& f : fragments)
+      if (joins(f, centre, kPieceDepthM))
+        area += fineGrower.labelCellsWithin(fragmentCells.data() + f.begin, f.end - f.begin, to,
+                                            centre, seg.handRadiusM);
+    return area;
+  };
+  const float area = relabel(label);
+  if (area < seg.minAreaM2) {  // overlapping pieces: not a volume after all
+    relabel(cloud::kTried);    // as they were (every piece was passed over)
+    return false;
+  }
+  GrownRegion merged = lead->region;
+  merged.areaM2 = area;
+  merged.cellCount = 0;
+  merged.pointSum = Vec3::Zero();
+  merged.pixelSum = Vec2::Zero();
+  merged.cutCount = 0;
+  merged.cutPointSum = Vec3::Zero();
+  merged.cutPixelSum = Vec2::Zero();
+  for (const Fragment& f : fragments) {
+    if (!joins(f, centre, kPieceDepthM)) continue;
+    merged.cellCount += f.region.cellCount;
+    merged.minI = std::min(merged.minI, f.region.minI);
+    merged.maxI = std::max(merged.maxI, f.region.maxI);
+    merged.minJ = std::min(merged.minJ, f.region.minJ);
+    merged.maxJ = std::max(merged.maxJ, f.region.maxJ);
+  }
+  region = merged;
+  return true;
 }
 
 void CloudPipeline::Impl::sampleCoarse(const DepthFrame& frame, DepthGrid& grid) {
@@ -452,11 +508,13 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
             if (r == 0 && !twoRegions) {
               for (const Fragment& f : fragments) {
                 if (!joins(f, g.nearestPoint, kFragmentDepthM)) continue;
-                fineGrower.labelCells(fragmentCells.data() + f.begin, f.end - f.begin,
-                                      static_cast<CellLabel>(label));
-                // Its cells count for the box too: a piece cut by the box widens it.
+                // Only its cells within the region's ball (the hand-radius rule), and only
+                // those not in the region already (it may have grown into the piece).
                 GrownRegion& taken = fineRegion[r];
-                taken.areaM2 += f.region.areaM2;
+                taken.areaM2 += fineGrower.labelCellsWithin(
+                    fragmentCells.data() + f.begin, f.end - f.begin, static_cast<CellLabel>(label),
+                    g.nearestPoint, seg.handRadiusM);
+                // Its cells count for the box too: a piece cut by the box widens it.
                 taken.minI = std::min(taken.minI, f.region.minI);
                 taken.maxI = std::max(taken.maxI, f.region.maxI);
                 taken.minJ = std::min(taken.minJ, f.region.minJ);
@@ -464,48 +522,19 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
               }
             }
           } else {
-            const bool piece = r == 0 && !twoRegions && !g.inFrontOfSurface;
+            // Recorded only while it fits the reserved buffers (no allocation per frame).
+            bool piece = r == 0 && !twoRegions && !g.inFrontOfSurface &&
+                         fragments.size() < fragments.capacity();
             if (piece) {
               Fragment f{g, fragmentCells.size(), 0};
-              fineGrower.appendLastRegion(fragmentCells);
+              piece = fineGrower.appendLastRegion(fragmentCells);
               f.end = fragmentCells.size();
-              fragments.push_back(f);
+              if (piece) fragments.push_back(f);
             }
             fineGrower.reject();
-            // Pieces that together make a volume (the nearest of them and those within its
-            // ball, at most kPieceDepthM behind it) are taken as one: the hand seen edge-on
-            // in missing data, which would otherwise lose to a forearm or body behind it.
-            if (piece) {
-              const Fragment* lead = nullptr;
-              for (const Fragment& f : fragments)
-                if (f.region.areaM2 >= kFragmentMinShare * seg.minAreaM2) {
-                  lead = &f;
-                  break;
-                }
-              float area = 0.0f;
-              if (lead != nullptr)
-                for (const Fragment& f : fragments)
-                  if (joins(f, lead->region.nearestPoint, kPieceDepthM)) area += f.region.areaM2;
-              if (area >= seg.minAreaM2) {
-                GrownRegion merged = lead->region;
-                merged.areaM2 = 0.0f;
-                merged.cellCount = 0;
-                merged.cutCount = 0;  // no cut: no arm direction from pieces
-                for (const Fragment& f : fragments) {
-                  if (!joins(f, lead->region.nearestPoint, kPieceDepthM)) continue;
-                  fineGrower.labelCells(fragmentCells.data() + f.begin, f.end - f.begin,
-                                        static_cast<CellLabel>(label));
-                  merged.areaM2 += f.region.areaM2;
-                  merged.cellCount += f.region.cellCount;
-                  merged.minI = std::min(merged.minI, f.region.minI);
-                  merged.maxI = std::max(merged.maxI, f.region.maxI);
-                  merged.minJ = std::min(merged.minJ, f.region.minJ);
-                  merged.maxJ = std::max(merged.maxJ, f.region.maxJ);
-                }
-                fineRegion[r] = merged;
-                fineFound[r] = true;
-              }
-            }
+            // Pieces that together make a volume are taken as one (mergePieces).
+            if (piece && mergePieces(static_cast<CellLabel>(label), fineRegion[r]))
+              fineFound[r] = true;
           }
         }
       }

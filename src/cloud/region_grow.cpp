@@ -380,6 +380,28 @@ void RegionGrower::reject() {
     labels_[cellOf(queue_[static_cast<std::size_t>(q)])] = kTried;
 }
 
+float RegionGrower::labelCellsWithin(const std::int32_t* packed, std::size_t count,
+                                     CellLabel region, const Vec3& centre, float radiusM) {
+  const auto label = static_cast<std::uint8_t>(region);
+  const float radius2 = radiusM * radiusM;
+  float areaZ2 = 0.0f;
+  for (std::size_t q = 0; q < count; ++q) {
+    const std::size_t c = cellOf(packed[q]);
+    if (labels_[c] == label) continue;
+    const int i = packed[q] & 0xffff;
+    const int j = packed[q] >> 16;
+    const float z = grid_.depth[c];
+    const Vec3 p(columnX_[static_cast<std::size_t>(i)] * z, rowY_[static_cast<std::size_t>(j)] * z,
+                 z);
+    if ((p - centre).squaredNorm() > radius2) continue;
+    labels_[c] = label;
+    labelled_ = true;
+    areaZ2 += z * z;
+  }
+  const auto step = static_cast<float>(grid_.step);
+  return areaZ2 * (step / k_.fx) * (step / k_.fy);
+}
+
 void RegionGrower::retireAccepted() {
   for (std::uint8_t& label : labels_) {
     if (label == kRegion1 || label == kRegion2) {

@@ -101,14 +101,18 @@ class RegionGrower {
   void accept(CellLabel region);
   // Labels the last grown region kTried (its seed is not tried again).
   void reject();
-  // Appends the last grown region's cells (packed j << 16 | i) to `out`.
-  void appendLastRegion(std::vector<std::int32_t>& out) const {
+  // Appends the last grown region's cells (packed j << 16 | i) to `out`, if they fit in its
+  // capacity (no allocation); false otherwise.
+  bool appendLastRegion(std::vector<std::int32_t>& out) const {
+    if (out.size() + static_cast<std::size_t>(regionEnd_) > out.capacity()) return false;
     out.insert(out.end(), queue_.begin(), queue_.begin() + regionEnd_);
+    return true;
   }
-  // Labels the given cells (packed, from appendLastRegion) `region`.
-  void labelCells(const std::int32_t* packed, std::size_t count, CellLabel region) {
-    for (std::size_t q = 0; q < count; ++q) labels_[cellOf(packed[q])] = region;
-  }
+  // Labels `region` those of the given cells (packed, from appendLastRegion) that lie within
+  // radiusM of centre and are not labelled `region` already; returns their area (m^2, as
+  // GrownRegion::areaM2 counts it).
+  float labelCellsWithin(const std::int32_t* packed, std::size_t count, CellLabel region,
+                         const Vec3& centre, float radiusM);
   // Turns all accepted regions into kTried and frees their cut cells.
   void retireAccepted();
 

@@ -152,6 +152,44 @@ TEST(CloudPipeline, AHandInPiecesIsTakenBeforeALargerSurfaceBehindIt) {
   EXPECT_FALSE(one.segment.found);
 }
 
+// Pieces taken together keep the hand-radius rule: no sample beyond the radius of the segment's
+// nearest point is in the cloud or the mask, at either grow step (two pieces 17 cm apart: the
+// farther one's far side lies beyond the ball).
+TEST(CloudPipeline, PiecesTakenTogetherStayWithinTheHandRadius) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  std::vector<Sphere> spheres;
+  cloud::scenes::addCapsule(spheres, Vec3(0.0f, 0.02f, 0.68f), Vec3(0.0f, 0.2f, 0.7f), 0.05f,
+                            0.01f);
+  spheres.push_back({Vec3(0.0f, -0.02f, 0.50f), 0.025f});
+  spheres.push_back({Vec3(0.0f, 0.15f, 0.505f), 0.025f});
+  const DepthFrame frame = cloud::scenes::render(k, spheres, 0.0f);
+  for (const int growStep : {1, 2}) {
+    SCOPED_TRACE(growStep);
+    CloudConfig config;
+    config.segmentation.growStep = growStep;
+    CloudPipeline pipeline(k, config);
+    CloudFrame out;
+    ASSERT_TRUE(pipeline.process(frame, out).ok());
+    ASSERT_TRUE(out.segment.found);
+    EXPECT_LT(out.segment.nearestPoint.z(), 0.5f);  // the pieces, not the forearm
+    const float radius = config.segmentation.handRadiusM;
+    const float voxelDiagonal = config.voxelSizeM * std::sqrt(3.0f);
+    for (const Vec3& p : out.points)
+      EXPECT_LE((p - out.segment.nearestPoint).norm(), radius + voxelDiagonal);
+    int beyond = 0;
+    for (int v = 0; v < k.height; ++v) {
+      for (int u = 0; u < k.width; ++u) {
+        const float z = out.depthAt(u, v);
+        if (z <= 0.0f || z > 0.6f) continue;
+        const Vec3 p = k.deproject(static_cast<float>(u), static_cast<float>(v), z);
+        if ((p - out.segment.nearestPoint).norm() <= radius + 0.005f) continue;
+        beyond += out.mask[static_cast<std::size_t>(v) * k.width + u] != 0;
+      }
+    }
+    EXPECT_EQ(beyond, 0) << "mask pixels beyond the hand radius";
+  }
+}
+
 TEST(CloudPipeline, RangeGateIgnoresObjectsTooClose) {
   const Intrinsics k = cloud::scenes::camera(320, 240);
   std::vector<Sphere> spheres = disc(Vec3(0.0f, 0.0f, 0.6f), 0.06f);

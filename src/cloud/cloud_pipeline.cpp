@@ -38,6 +38,14 @@ constexpr float kFragmentDepthM = 0.02f;
 // anything.
 constexpr float kFragmentMinShare = 0.05f;
 
+// Widens region's cell box to hold piece's too.
+void includeBox(GrownRegion& region, const GrownRegion& piece) {
+  region.minI = std::min(region.minI, piece.minI);
+  region.maxI = std::max(region.maxI, piece.maxI);
+  region.minJ = std::min(region.minJ, piece.minJ);
+  region.maxJ = std::max(region.maxJ, piece.maxJ);
+}
+
 // Nearest integer for x >= -0.5 (pixel coordinates), without a libm call.
 int roundToInt(float x) {
   return static_cast<int>(x + 0.5f);
@@ -76,11 +84,14 @@ struct CloudPipeline::Impl {
     GrownRegion region;
     std::size_t begin, end;
   };
+  bool isSpeck(const Fragment& f) const {
+    return f.region.areaM2 < kFragmentMinShare * config.segmentation.minAreaM2;
+  }
   // Whether piece f joins a volume whose nearest point is `nearest`: not a speck, within the
   // hand's ball, at most kPieceFrontM in front of that point and `behindM` behind it.
   bool joins(const Fragment& f, const Vec3& nearest, float behindM) const {
     const float dz = f.region.nearestPoint.z() - nearest.z();
-    return f.region.areaM2 >= kFragmentMinShare * config.segmentation.minAreaM2 &&
+    return !isSpeck(f) &&
            (f.region.nearestPoint - nearest).norm() <= config.segmentation.handRadiusM &&
            dz >= -kPieceFrontM && dz <= behindM;
   }
@@ -220,9 +231,8 @@ Status CloudPipeline::process(const DepthFrame& frame, CloudFrame& out) {
 
 bool CloudPipeline::Impl::mergePieces(CellLabel label, GrownRegion& region) {
   const SegmentationConfig& seg = config.segmentation;
-  const auto lead = std::find_if(fragments.begin(), fragments.end(), [&](const Fragment& f) {
-    return f.region.areaM2 >= kFragmentMinShare * seg.minAreaM2;
-  });
+  const auto lead = std::find_if(fragments.begin(), fragments.end(),
+                                 [&](const Fragment& f) { return !isSpeck(f); });
   if (lead == fragments.end()) return false;
   const Vec3 centre = lead->region.nearestPoint;
   float estimate = 0.0f;  // pieces may overlap: an upper bound
@@ -253,10 +263,7 @@ bool CloudPipeline::Impl::mergePieces(CellLabel label, GrownRegion& region) {
   for (const Fragment& f : fragments) {
     if (!joins(f, centre, kPieceDepthM)) continue;
     merged.cellCount += f.region.cellCount;
-    merged.minI = std::min(merged.minI, f.region.minI);
-    merged.maxI = std::max(merged.maxI, f.region.maxI);
-    merged.minJ = std::min(merged.minJ, f.region.minJ);
-    merged.maxJ = std::max(merged.maxJ, f.region.maxJ);
+    includeBox(merged, f.region);
   }
   region = merged;
   return true;
@@ -514,11 +521,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
                 taken.areaM2 += fineGrower.labelCellsWithin(
                     fragmentCells.data() + f.begin, f.end - f.begin, static_cast<CellLabel>(label),
                     g.nearestPoint, seg.handRadiusM);
-                // Its cells count for the box too: a piece cut by the box widens it.
-                taken.minI = std::min(taken.minI, f.region.minI);
-                taken.maxI = std::max(taken.maxI, f.region.maxI);
-                taken.minJ = std::min(taken.minJ, f.region.minJ);
-                taken.maxJ = std::max(taken.maxJ, f.region.maxJ);
+                includeBox(taken, f.region);  // a piece cut by the box widens it
               }
             }
           } else {

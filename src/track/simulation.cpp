@@ -46,10 +46,10 @@ int Simulator::labelCell(const Intrinsics& k, const Vec3& p) const {
   if (!(p.z() > 0.0f)) return -1;
   const Vec2 pixel = k.project(p);
   const float u = pixel.x() * labelScale_, v = pixel.y() * labelScale_;
-  if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(labelColumns_) &&
+  if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(kLabelColumns) &&
         v < static_cast<float>(labelRows_)))
     return -1;
-  return static_cast<int>(v) * labelColumns_ + static_cast<int>(u);
+  return static_cast<int>(v) * kLabelColumns + static_cast<int>(u);
 }
 
 void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
@@ -62,14 +62,14 @@ void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
     const Intrinsics& k = cloud->intrinsics;
     labelScale_ = kLabelColumns / static_cast<float>(std::max(k.width, 1));
     const int rows = static_cast<int>(std::ceil(static_cast<float>(k.height) * labelScale_));
-    if (labelColumns_ != kLabelColumns || labelRows_ != rows) {
-      labelColumns_ = kLabelColumns;
+    if (labelRows_ != rows) {
       labelRows_ = rows;
-      labels_.assign(static_cast<std::size_t>(labelColumns_ * labelRows_), -1);
+      labels_.assign(static_cast<std::size_t>(kLabelColumns * labelRows_), -1);
     }
     hints_.resize(input.points.size());
+    pointCells_.resize(input.points.size());
     for (std::size_t i = 0; i < input.points.size(); ++i) {
-      const int cell = labelCell(k, input.points[i]);
+      const int cell = pointCells_[i] = labelCell(k, input.points[i]);
       if (cell >= 0 && labels_[static_cast<std::size_t>(cell)] >= 0)
         hints_[i] = labels_[static_cast<std::size_t>(cell)];
     }
@@ -86,7 +86,7 @@ void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
   if (cloud != nullptr) {
     std::fill(labels_.begin(), labels_.end(), -1);
     for (std::size_t i = 0; i < input.points.size(); ++i) {
-      const int cell = labelCell(cloud->intrinsics, input.points[i]);
+      const int cell = pointCells_[i];
       if (cell >= 0) labels_[static_cast<std::size_t>(cell)] = static_cast<std::int8_t>(hints_[i]);
     }
   }

@@ -120,7 +120,8 @@ class Simulator {
   static constexpr int kLabelColumns = 80;
   int labelCell(const Intrinsics& k, const Vec3& p) const;  // -1 outside the grid
   std::vector<std::int8_t> labels_;
-  int labelColumns_ = 0, labelRows_ = 0;
+  std::vector<int> pointCells_;  // (points) each point's cell this frame, -1: none
+  int labelRows_ = 0;
   float labelScale_ = 0.0f;  // grid cells per pixel
   int pass_ = 0;                       // substeps since beginFrame: picks the point subset
 };

@@ -247,6 +247,10 @@ class World {
                    float band = std::numeric_limits<float>::infinity());
 
   void step(float dt);
+  // step() prepares the surface rows four at a time with SSE where the CPU has it (on by
+  // default), else one by one; both give identical bits. false forces the narrow path (for
+  // tests comparing the two); returns whether the wide path is now in use.
+  static bool useWideSurfacePrepare(bool enabled);
 
   void saveState(WorldState& out) const { out = state_; }
   void restoreState(const WorldState& in);

@@ -144,6 +144,7 @@ struct World::Impl {
   std::vector<WorldState::CachedContact> newContacts;
   // Prepared surface rows (parallel to SurfaceRows), packed for the solver.
   std::vector<PreparedSurfaceRow> surfaceRows;
+  std::vector<int> surfaceRowsByBody, surfaceBodyStart;  // prepareSurfaceRows' scratch
   SurfaceBatches surfaceBatches;
 
   int slotOf(const WorldState& s, BodyId b) const {

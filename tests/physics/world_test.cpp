@@ -1,7 +1,9 @@
 // Contacts, welding, snapshots, determinism and allocation behaviour of the world.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "dynahand/physics_world.h"
@@ -219,6 +221,52 @@ TEST(Determinism, TwoRunsGiveIdenticalBytes) {
   run(&b);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "step " << i;
+}
+
+// The surface rows prepared four at a time (SSE) and one at a time give the same bytes: rows of
+// every kind (two-sided, line of sight, boundary; ahead of and behind their surface), on free
+// bodies and on a weld group, with per-body counts that are and are not multiples of four.
+TEST(Determinism, SurfaceRowsPreparedFourAtATimeGiveTheSameBytes) {
+  auto run = [](bool wide, std::vector<std::uint64_t>* hashes, std::vector<float>* impulses) {
+    World::useWideSurfacePrepare(wide);
+    scenes::HandLike h = scenes::makeHandLike();
+    World& w = h.world;
+    w.reserveRows(1000);
+    for (int i = 0; i < 60; ++i) {
+      w.rows().clear();
+      scenes::addRandomSurfaceRows(w, 301 + i, static_cast<std::uint64_t>(i), 0.01f);
+      for (int k = 0; k < 40; ++k) {
+        const BodyId b = k % w.bodyCount();
+        const Vec3 p = w.pose(b).p + Vec3(0.004f * static_cast<float>(k % 5) - 0.008f, 0, -0.02f);
+        w.rows().addLineOfSight(b, Vec3::Zero(), p.normalized(), p, 0.01f);
+      }
+      for (int b = 0; b < w.bodyCount(); ++b)
+        w.addBoundary(b, Vec3(0.0f, -1.0f, 0.0f), -w.pose(1).p.y() - 0.01f, 0.01f, 0.03f);
+      if (i == 20) w.weld(std::vector<BodyId>{0, 1, 2, 5});
+      if (i == 40) w.unweldAll();
+      w.step(kDt);
+      hashes->push_back(w.stateHash());
+      impulses->insert(impulses->end(), w.rows().impulse.begin(), w.rows().impulse.end());
+    }
+  };
+  std::vector<std::uint64_t> wideHashes, narrowHashes;
+  std::vector<float> wideImpulses, narrowImpulses;
+  run(false, &narrowHashes, &narrowImpulses);
+  const bool wide = World::useWideSurfacePrepare(true);
+  run(true, &wideHashes, &wideImpulses);
+  if (!wide) GTEST_SKIP() << "no SSE: only the one-at-a-time path exists";
+  ASSERT_EQ(wideHashes.size(), narrowHashes.size());
+  for (std::size_t i = 0; i < wideHashes.size(); ++i)
+    ASSERT_EQ(wideHashes[i], narrowHashes[i]) << "step " << i;
+  ASSERT_EQ(wideImpulses.size(), narrowImpulses.size());
+  std::size_t nonZero = 0;
+  for (std::size_t i = 0; i < wideImpulses.size(); ++i) {
+    ASSERT_EQ(std::bit_cast<std::uint32_t>(wideImpulses[i]),
+              std::bit_cast<std::uint32_t>(narrowImpulses[i]))
+        << "row impulse " << i;
+    nonZero += wideImpulses[i] != 0.0f;
+  }
+  EXPECT_GT(nonZero, wideImpulses.size() / 4);  // the rows did act
 }
 
 TEST(Allocation, NoHeapAllocationPerStepAfterWarmUp) {

@@ -41,6 +41,9 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     copyCount += copies;
   }
   copies_.resize(static_cast<std::size_t>(copyCount));
+  slotCopies_.assign(static_cast<std::size_t>(slotCount_), 1.0f);
+  for (const Split& sp : splits_)
+    slotCopies_[static_cast<std::size_t>(sp.slot)] = static_cast<float>(sp.copies);
   // Each row's solving slot: its own, or for a split slot the copies in turn (so that every
   // copy sees rows from all over the body).
   virtualSlot_.resize(static_cast<std::size_t>(n));
@@ -101,26 +104,14 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   // velocities in registers until the lane moves on).
   const int batchCount = std::max((n + 3) / 4, largest);
   batches_.resize(static_cast<std::size_t>(batchCount));
-  for (Batch& b : batches_) {
-    for (int k = 0; k < 4; ++k) {
-      b.slot[k] = dummySlot;
-      b.row[k] = -1;
-      b.nx[k] = b.ny[k] = b.nz[k] = b.ax[k] = b.ay[k] = b.az[k] = 0.0f;
-      b.ix[k] = b.iy[k] = b.iz[k] = 0.0f;
-      b.ux[k] = b.uy[k] = b.uz[k] = 0.0f;
-      b.effMass[k] = b.bias[k] = b.relaxBias[k] = b.lower[k] = b.upper[k] = b.impulse[k] = 0.0f;
-    }
-  }
-  int position = 0;
-  auto copiesOf = [&](int slot) {
-    const int k = splitOfSlot_[static_cast<std::size_t>(slot)];
-    return k < 0 ? 1 : splits_[static_cast<std::size_t>(k)].copies;
-  };
+  // The next free cell of the table: batch `column`, lane `lane` (dealt down the columns).
+  int column = 0, lane = 0;
   auto deal = [&](int o) {
     const int i = order_[static_cast<std::size_t>(o)];
     const PreparedSurfaceRow& r = rows[static_cast<std::size_t>(i)];
-    Batch& b = batches_[static_cast<std::size_t>(position % batchCount)];
-    const int k = position / batchCount;
+    Batch& b = batches_[static_cast<std::size_t>(column)];
+    const int k = lane;
+    if (++column == batchCount) column = 0, ++lane;
     b.slot[k] = virtualSlot_[static_cast<std::size_t>(i)];
     b.row[k] = i;
     b.nx[k] = r.normal.x();
@@ -131,7 +122,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     b.az[k] = r.ang.z();
     // A copy holds 1/copies of its slot's mass: inverse mass and inertia times copies (exactly
     // the slot's own values for an unsplit slot, copies = 1).
-    const auto copies = static_cast<float>(copiesOf(r.slot));
+    const float copies = slotCopies_[static_cast<std::size_t>(r.slot)];
     const float invMass = bodies[static_cast<std::size_t>(r.slot)].invMass * copies;
     b.ix[k] = r.invIAng.x() * copies;
     b.iy[k] = r.invIAng.y() * copies;
@@ -144,7 +135,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     b.relaxBias[k] = r.relaxBias;
     b.lower[k] = r.lower;
     b.upper[k] = r.upper;
-    ++position;
+    b.impulse[k] = 0.0f;
   };
   // A slot's rows (in input order, i.e. scanline order of the points) taken every kSpread-th:
   // Gauss-Seidel then alternates between parts of the body instead of sweeping it from one
@@ -154,6 +145,18 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     const int end = start_[static_cast<std::size_t>(slot) + 1];
     for (int residue = 0; residue < kSpread; ++residue)
       for (int o = first + residue; o < end; o += kSpread) deal(o);
+  }
+  // The cells left over: padding on the dummy slot, all zero (they never act).
+  while (batchCount > 0 && lane < 4) {
+    Batch& b = batches_[static_cast<std::size_t>(column)];
+    const int k = lane;
+    if (++column == batchCount) column = 0, ++lane;
+    b.slot[k] = dummySlot;
+    b.row[k] = -1;
+    b.nx[k] = b.ny[k] = b.nz[k] = b.ax[k] = b.ay[k] = b.az[k] = 0.0f;
+    b.ix[k] = b.iy[k] = b.iz[k] = 0.0f;
+    b.ux[k] = b.uy[k] = b.uz[k] = 0.0f;
+    b.effMass[k] = b.bias[k] = b.relaxBias[k] = b.lower[k] = b.upper[k] = b.impulse[k] = 0.0f;
   }
 }
 

@@ -60,6 +60,7 @@ class SurfaceBatches {
   std::vector<Split> splits_;
   std::vector<int> splitOfSlot_;  // (slots) index into splits_, -1 when not split
   std::vector<int> rowsSeen_;     // (slots) scratch while dealing rows to copies
+  std::vector<float> slotCopies_;  // (slots) copies a slot is split into (1: not split)
   std::vector<SolverBody> copies_;
   int slotCount_ = 0;  // real solver slots; copies are numbered after them
 };

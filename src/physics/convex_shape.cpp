@@ -319,10 +319,12 @@ void ConvexShape::computeDerived() {
 bool ConvexShape::onFacePolygon(const Face& face, const Vec3& projected) const {
   // Inside the polygon when on the inner side of every edge (CCW about the normal).
   const std::size_t count = face.vertices.size();
-  for (std::size_t i = 0; i < count; ++i) {
-    const Vec3& a = vertices_[static_cast<std::size_t>(face.vertices[i])];
-    const Vec3& b = vertices_[static_cast<std::size_t>(face.vertices[(i + 1) % count])];
-    if ((b - a).cross(projected - a).dot(face.normal) < 0.0f) return false;
+  if (count == 0) return true;
+  const Vec3* a = &vertices_[static_cast<std::size_t>(face.vertices[count - 1])];
+  for (std::size_t i = 0; i < count; ++i) {  // edges (last, 0), (0, 1), ...
+    const Vec3& b = vertices_[static_cast<std::size_t>(face.vertices[i])];
+    if ((b - *a).cross(projected - *a).dot(face.normal) < 0.0f) return false;
+    a = &b;
   }
   return true;
 }

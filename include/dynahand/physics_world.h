@@ -251,6 +251,10 @@ class World {
   // default), else one by one; both give identical bits. false forces the narrow path (for
   // tests comparing the two); returns whether the wide path is now in use.
   static bool useWideSurfacePrepare(bool enabled);
+  // a.step(dt) and b.step(dt) (two different worlds with the same iteration counts), with
+  // the same bits, in less time: their surface-row sweeps run side by side, eight rows per
+  // AVX instruction, where the CPU has AVX (otherwise simply one step after the other).
+  static void stepTogether(World& a, World& b, float dt);
 
   void saveState(WorldState& out) const { out = state_; }
   void restoreState(const WorldState& in);
@@ -265,6 +269,13 @@ class World {
   struct Impl;  // body/row arrays and scratch (src/physics/world_impl.h)
 
  private:
+  // step() in parts (solver.cpp), so that stepTogether can interleave two worlds' sweeps:
+  // slots, rows and warm start; positions integrated and joints projected; impulses stored
+  // and the state written back. Between them, the sweeps.
+  void beginStep(float h);
+  void solveJointAndContactRows(bool useBias);  // one sweep of all but the surface rows
+  void integrate(float h);
+  void endStep();
   void buildContacts(float dt);  // narrow phase + contact rows (contact_rows.cpp)
   void storeContactImpulses();   // contact cache for the next step's warm start
 

@@ -396,6 +396,58 @@ bool World::useWideSurfacePrepare(bool enabled) {
 void World::step(float h) {
   assert(h > 0.0f && std::isfinite(h) && "step: dt must be positive");
   const FlushDenormals flushDenormals;
+  beginStep(h);
+  for (int it = 0; it < settings_.iterations; ++it) {
+    impl_->surfaceBatches.solve(impl_->solverBodies, true);
+    solveJointAndContactRows(true);
+  }
+  integrate(h);
+  for (int it = 0; it < settings_.relaxIterations; ++it) {
+    impl_->surfaceBatches.solve(impl_->solverBodies, false);
+    solveJointAndContactRows(false);
+  }
+  endStep();
+}
+
+void World::stepTogether(World& a, World& b, float h) {
+  assert(h > 0.0f && std::isfinite(h) && "stepTogether: dt must be positive");
+  if (&a == &b || a.settings_.iterations != b.settings_.iterations ||
+      a.settings_.relaxIterations != b.settings_.relaxIterations ||
+      !SurfaceBatches::canSolveTogether()) {
+    a.step(h);
+    b.step(h);
+    return;
+  }
+  const FlushDenormals flushDenormals;
+  a.beginStep(h);
+  b.beginStep(h);
+  Impl& ma = *a.impl_;
+  Impl& mb = *b.impl_;
+  for (int it = 0; it < a.settings_.iterations; ++it) {
+    SurfaceBatches::solveTogether(ma.surfaceBatches, ma.solverBodies, mb.surfaceBatches,
+                                  mb.solverBodies, true);
+    a.solveJointAndContactRows(true);
+    b.solveJointAndContactRows(true);
+  }
+  a.integrate(h);
+  b.integrate(h);
+  for (int it = 0; it < a.settings_.relaxIterations; ++it) {
+    SurfaceBatches::solveTogether(ma.surfaceBatches, ma.solverBodies, mb.surfaceBatches,
+                                  mb.solverBodies, false);
+    a.solveJointAndContactRows(false);
+    b.solveJointAndContactRows(false);
+  }
+  a.endStep();
+  b.endStep();
+}
+
+void World::solveJointAndContactRows(bool useBias) {
+  Impl& m = *impl_;
+  solveRows(m.solverBodies, m.rows, useBias);
+  solvePointBlocks(m.solverBodies, m.pointBlocks, useBias);
+}
+
+void World::beginStep(float h) {
   Impl& m = *impl_;
   WorldState& s = state_;
   const float invH = 1.0f / h;
@@ -634,17 +686,17 @@ void World::step(float h) {
   prepareSurfaceRows(m, s, rows_, settings_.surfaceErp, invH);
   m.surfaceBatches.build(m.surfaceRows, m.solverBodies, dummy);
 
-  // --- Warm start, solve with bias, integrate positions, relax. ---
+  // --- Warm start (then step() solves with bias, integrates positions and relaxes). ---
   for (const Row& r : m.rows) {
     if (r.impulse != 0.0f) applyRowImpulse(m.solverBodies, r, r.impulse);
   }
   for (const Impl::PointBlock& pb : m.pointBlocks)
     applyPointImpulse(m.solverBodies, pb, pb.impulse);
-  for (int it = 0; it < settings_.iterations; ++it) {
-    m.surfaceBatches.solve(m.solverBodies, true);
-    solveRows(m.solverBodies, m.rows, true);
-    solvePointBlocks(m.solverBodies, m.pointBlocks, true);
-  }
+}
+
+void World::integrate(float h) {
+  Impl& m = *impl_;
+  const std::size_t slotCount = m.solverBodies.size();  // the last is the static dummy
   for (std::size_t slot = 0; slot + 1 < slotCount; ++slot) {
     const SolverBody& b = m.solverBodies[slot];
     Quat& q = m.slotOrientation[slot];
@@ -661,11 +713,13 @@ void World::step(float h) {
     q.normalize();
   }
   projectJointPositions(m, settings_.positionIterations);
-  for (int it = 0; it < settings_.relaxIterations; ++it) {
-    m.surfaceBatches.solve(m.solverBodies, false);
-    solveRows(m.solverBodies, m.rows, false);
-    solvePointBlocks(m.solverBodies, m.pointBlocks, false);
-  }
+}
+
+void World::endStep() {
+  Impl& m = *impl_;
+  WorldState& s = state_;
+  const std::size_t n = m.bodies.size();
+  const std::size_t groupCount = s.groups.size();
   for (const Row& r : m.rows) {
     if (r.store) *r.store = r.impulse;
   }

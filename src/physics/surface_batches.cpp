@@ -9,6 +9,10 @@
 #if defined(__SSE__)
 #include <xmmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define DYNAHAND_SWEEP_AVX 1
+#endif
 
 namespace dynahand::physics {
 namespace {
@@ -25,6 +29,7 @@ void SurfaceBatches::reserve(int rows) {
 void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
                            const std::vector<SolverBody>& bodies, int dummySlot) {
   slotCount_ = static_cast<int>(bodies.size());
+  dummySlot_ = dummySlot;
   const int n = static_cast<int>(rows.size());
   // Slots with more rows than a four-wide sweep has batches are split (see the header), but
   // not small sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster.
@@ -293,6 +298,169 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
     }
   }
   endCopies(bodies);
+}
+#endif
+
+#if defined(DYNAHAND_SWEEP_AVX)
+namespace {
+// Static initialisers may run before the library's own CPU detection: run it first.
+bool cpuHasAvx() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx") != 0;
+}
+const bool kHasAvx = cpuHasAvx();
+
+// Four bodies of each sweep, as in LaneBodies: lanes 0-3 are sweep a's, 4-7 sweep b's.
+// A field of two batches as one register: a's four lanes low, b's high.
+__attribute__((target("avx"))) inline __m256 load(const float (&fa)[4], const float (&fb)[4]) {
+  return _mm256_set_m128(_mm_load_ps(fb), _mm_load_ps(fa));
+}
+
+struct alignas(32) PairedLaneBodies {
+  __m256 vx, vy, vz, wx, wy, wz;
+  __m128 invMass[2], pad[2];  // kept only to be written back
+
+  __attribute__((target("avx"))) void loadHalf(int half, float* const p[4]) {
+    __m128 x = _mm_loadu_ps(p[0]), y = _mm_loadu_ps(p[1]), z = _mm_loadu_ps(p[2]),
+           m = _mm_loadu_ps(p[3]);
+    _MM_TRANSPOSE4_PS(x, y, z, m);
+    __m128 ax = _mm_loadu_ps(p[0] + 4), ay = _mm_loadu_ps(p[1] + 4), az = _mm_loadu_ps(p[2] + 4),
+           ad = _mm_loadu_ps(p[3] + 4);
+    _MM_TRANSPOSE4_PS(ax, ay, az, ad);
+    invMass[half] = m;
+    pad[half] = ad;
+    if (half == 0) {
+      vx = _mm256_insertf128_ps(vx, x, 0), vy = _mm256_insertf128_ps(vy, y, 0);
+      vz = _mm256_insertf128_ps(vz, z, 0), wx = _mm256_insertf128_ps(wx, ax, 0);
+      wy = _mm256_insertf128_ps(wy, ay, 0), wz = _mm256_insertf128_ps(wz, az, 0);
+    } else {
+      vx = _mm256_insertf128_ps(vx, x, 1), vy = _mm256_insertf128_ps(vy, y, 1);
+      vz = _mm256_insertf128_ps(vz, z, 1), wx = _mm256_insertf128_ps(wx, ax, 1);
+      wy = _mm256_insertf128_ps(wy, ay, 1), wz = _mm256_insertf128_ps(wz, az, 1);
+    }
+  }
+  __attribute__((target("avx"))) void storeHalf(int half, float* const p[4]) const {
+    __m128 x, y, z, ax, ay, az;
+    if (half == 0) {
+      x = _mm256_castps256_ps128(vx), y = _mm256_castps256_ps128(vy);
+      z = _mm256_castps256_ps128(vz), ax = _mm256_castps256_ps128(wx);
+      ay = _mm256_castps256_ps128(wy), az = _mm256_castps256_ps128(wz);
+    } else {
+      x = _mm256_extractf128_ps(vx, 1), y = _mm256_extractf128_ps(vy, 1);
+      z = _mm256_extractf128_ps(vz, 1), ax = _mm256_extractf128_ps(wx, 1);
+      ay = _mm256_extractf128_ps(wy, 1), az = _mm256_extractf128_ps(wz, 1);
+    }
+    __m128 m = invMass[half], d = pad[half];
+    _MM_TRANSPOSE4_PS(x, y, z, m);
+    _mm_storeu_ps(p[0], x);
+    _mm_storeu_ps(p[1], y);
+    _mm_storeu_ps(p[2], z);
+    _mm_storeu_ps(p[3], m);
+    _MM_TRANSPOSE4_PS(ax, ay, az, d);
+    _mm_storeu_ps(p[0] + 4, ax);
+    _mm_storeu_ps(p[1] + 4, ay);
+    _mm_storeu_ps(p[2] + 4, az);
+    _mm_storeu_ps(p[3] + 4, d);
+  }
+};
+}  // namespace
+
+bool SurfaceBatches::canSolveTogether() {
+  return kHasAvx;
+}
+
+__attribute__((target("avx"))) void SurfaceBatches::solveTogether(SurfaceBatches& a,
+                                                                  std::vector<SolverBody>& bodiesA,
+                                                                  SurfaceBatches& b,
+                                                                  std::vector<SolverBody>& bodiesB,
+                                                                  bool useBias) {
+  if (!kHasAvx || a.batches_.empty() || b.batches_.empty()) {
+    a.solve(bodiesA, useBias);
+    b.solve(bodiesB, useBias);
+    return;
+  }
+  a.beginCopies(bodiesA);
+  b.beginCopies(bodiesB);
+  SurfaceBatches* sweep[2] = {&a, &b};
+  std::vector<SolverBody>* bodies[2] = {&bodiesA, &bodiesB};
+  // The shorter sweep runs out first: its lanes then solve a padding batch (every lane on its
+  // dummy slot, all zero), which changes nothing.
+  Batch padding[2]{};
+  for (int h = 0; h < 2; ++h) {
+    for (int k = 0; k < 4; ++k) {
+      padding[h].slot[k] = sweep[h]->dummySlot_;
+      padding[h].row[k] = -1;
+    }
+  }
+  const std::size_t count[2] = {a.batches_.size(), b.batches_.size()};
+  const std::size_t total = std::max(count[0], count[1]);
+  auto batchOf = [&](int h, std::size_t i) -> Batch& {
+    return i < count[h] ? sweep[h]->batches_[i] : padding[h];
+  };
+  float* p[2][4];
+  __m128i slots[2];
+  PairedLaneBodies lane;
+  lane.vx = lane.vy = lane.vz = lane.wx = lane.wy = lane.wz = _mm256_setzero_ps();
+  for (int h = 0; h < 2; ++h) {
+    const Batch& first = batchOf(h, 0);
+    slots[h] = _mm_load_si128(reinterpret_cast<const __m128i*>(first.slot));
+    for (int k = 0; k < 4; ++k) p[h][k] = sweep[h]->laneBody(*bodies[h], first.slot[k]);
+    lane.loadHalf(h, p[h]);
+  }
+  for (std::size_t i = 0; i < total; ++i) {
+    Batch& ba = batchOf(0, i);
+    Batch& bb = batchOf(1, i);
+    Batch* batch[2] = {&ba, &bb};
+    for (int h = 0; h < 2; ++h) {
+      const __m128i next = _mm_load_si128(reinterpret_cast<const __m128i*>(batch[h]->slot));
+      if (_mm_movemask_epi8(_mm_cmpeq_epi32(next, slots[h])) != 0xFFFF) {
+        lane.storeHalf(h, p[h]);
+        for (int k = 0; k < 4; ++k) p[h][k] = sweep[h]->laneBody(*bodies[h], batch[h]->slot[k]);
+        lane.loadHalf(h, p[h]);
+        slots[h] = next;
+      }
+    }
+    // solve()'s arithmetic, lane for lane.
+    const __m256 effMass = load(ba.effMass, bb.effMass);
+    const __m256 old = load(ba.impulse, bb.impulse);
+    const __m256 base = _mm256_sub_ps(
+        old, _mm256_mul_ps(effMass, useBias ? load(ba.bias, bb.bias)
+                                            : load(ba.relaxBias, bb.relaxBias)));
+    const __m256 jv = _mm256_add_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(load(ba.nx, bb.nx), lane.vx),
+                                    _mm256_mul_ps(load(ba.ny, bb.ny), lane.vy)),
+                      _mm256_mul_ps(load(ba.nz, bb.nz), lane.vz)),
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(load(ba.ax, bb.ax), lane.wx),
+                                    _mm256_mul_ps(load(ba.ay, bb.ay), lane.wy)),
+                      _mm256_mul_ps(load(ba.az, bb.az), lane.wz)));
+    const __m256 clamped = _mm256_min_ps(
+        _mm256_max_ps(_mm256_sub_ps(base, _mm256_mul_ps(effMass, jv)), load(ba.lower, bb.lower)),
+        load(ba.upper, bb.upper));
+    _mm_store_ps(ba.impulse, _mm256_castps256_ps128(clamped));
+    _mm_store_ps(bb.impulse, _mm256_extractf128_ps(clamped, 1));
+    const __m256 d = _mm256_sub_ps(clamped, old);
+    lane.vx = _mm256_add_ps(lane.vx, _mm256_mul_ps(d, load(ba.ux, bb.ux)));
+    lane.vy = _mm256_add_ps(lane.vy, _mm256_mul_ps(d, load(ba.uy, bb.uy)));
+    lane.vz = _mm256_add_ps(lane.vz, _mm256_mul_ps(d, load(ba.uz, bb.uz)));
+    lane.wx = _mm256_add_ps(lane.wx, _mm256_mul_ps(d, load(ba.ix, bb.ix)));
+    lane.wy = _mm256_add_ps(lane.wy, _mm256_mul_ps(d, load(ba.iy, bb.iy)));
+    lane.wz = _mm256_add_ps(lane.wz, _mm256_mul_ps(d, load(ba.iz, bb.iz)));
+  }
+  lane.storeHalf(0, p[0]);
+  lane.storeHalf(1, p[1]);
+  a.endCopies(bodiesA);
+  b.endCopies(bodiesB);
+}
+#else
+bool SurfaceBatches::canSolveTogether() {
+  return false;
+}
+
+void SurfaceBatches::solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA,
+                                   SurfaceBatches& b, std::vector<SolverBody>& bodiesB,
+                                   bool useBias) {
+  a.solve(bodiesA, useBias);
+  b.solve(bodiesB, useBias);
 }
 #endif
 

@@ -34,6 +34,14 @@ class SurfaceBatches {
              int dummySlot);
   // One sweep over every row, with the position bias (solve) or the relax bias.
   void solve(std::vector<SolverBody>& bodies, bool useBias);
+  // a.solve(bodiesA, useBias) and b.solve(bodiesB, useBias) (of two different worlds) side by
+  // side, a's four lanes and b's four in one eight-wide AVX register: each lane does exactly
+  // what solve() does, so the same bits, but the two sweeps' latency chains overlap.
+  static void solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA,
+                            SurfaceBatches& b, std::vector<SolverBody>& bodiesB, bool useBias);
+  // Whether solveTogether runs side by side here (the CPU has AVX); otherwise it solves one
+  // after the other.
+  static bool canSolveTogether();
   // The accumulated impulse of every row, in the order given to build().
   void writeImpulses(float* impulses) const;
   void reserve(int rows);
@@ -63,6 +71,7 @@ class SurfaceBatches {
   std::vector<float> slotCopies_;  // (slots) copies a slot is split into (1: not split)
   std::vector<SolverBody> copies_;
   int slotCount_ = 0;  // real solver slots; copies are numbered after them
+  int dummySlot_ = 0;  // build()'s: the slot padding lanes point at
 };
 
 }  // namespace dynahand::physics

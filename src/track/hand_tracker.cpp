@@ -76,6 +76,15 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
                                                  {}}));
     lanes_.back()->rig.world().reserveRows(rows);
   }
+  // Lanes by decreasing run length (ties in lane order), so that paired runs end together.
+  for (std::size_t k = 0; k < lanes_.size(); ++k) {
+    const int steps = lanes_[k]->strategy->steps(settings_.substeps);
+    auto at = pairOrder_.begin();
+    while (at != pairOrder_.end() &&
+           lanes_[static_cast<std::size_t>(*at)]->strategy->steps(settings_.substeps) >= steps)
+      ++at;
+    pairOrder_.insert(at, static_cast<int>(k));
+  }
   openAngles_ = model::zeroAngles(model);
   model::clampToLimits(model, openAngles_);
 }
@@ -192,26 +201,50 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
                          settings_.forearmHoldForce > 0.0f ? &hold : nullptr};
   // Every simulation's first substep maps the points at the same poses: once, shared.
   simulator_.mapFrameStart(rig_, input);
-  auto runLane = [&](int index) {
-    Lane& lane = *lanes_[static_cast<std::size_t>(index)];
+  auto contextOf = [&](Lane& lane) {
+    return StrategyContext{lane.rig,   lane.simulator,        input,           settings_.substeps,
+                           frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};
+  };
+  auto startLane = [&](Lane& lane) {
     lane.rig.world().restoreState(start_);
     lane.simulator.beginFrame(&simulator_);
-    StrategyContext context{lane.rig,   lane.simulator,        input,           settings_.substeps,
-                            frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};
-    Candidate& candidate = lane.candidate;
-    candidate.kind = lane.strategy->kind();
-    candidate.error = 0.0f;
-    candidate.ran = lane.strategy->run(context);
-    if (!candidate.ran || !settings_.keepCandidates) return;
+    lane.candidate.kind = lane.strategy->kind();
+    lane.candidate.error = 0.0f;
+  };
+  auto finishLane = [&](Lane& lane) {
+    if (!lane.candidate.ran || !settings_.keepCandidates) return;
     evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error);
-    candidate.error = lane.error.total;
-    lane.rig.readPose(candidate.pose);
+    lane.candidate.error = lane.error.total;
+    lane.rig.readPose(lane.candidate.pose);
+  };
+  auto runLane = [&](int index) {
+    Lane& lane = *lanes_[static_cast<std::size_t>(index)];
+    startLane(lane);
+    StrategyContext context = contextOf(lane);
+    lane.candidate.ran = runStrategy(*lane.strategy, context);
+    finishLane(lane);
   };
   const int count = static_cast<int>(lanes_.size());
   if (pool_ != nullptr) {
     pool_->run(count, runLane);
   } else {
-    for (int i = 0; i < count; ++i) runLane(i);
+    // Two lanes at a time (pairOrder_: runs of equal length together), their worlds stepped
+    // side by side: the same bits as one after the other, in less time.
+    std::size_t k = 0;
+    for (; k + 1 < pairOrder_.size(); k += 2) {
+      Lane& a = *lanes_[static_cast<std::size_t>(pairOrder_[k])];
+      Lane& b = *lanes_[static_cast<std::size_t>(pairOrder_[k + 1])];
+      startLane(a);
+      startLane(b);
+      StrategyContext contextA = contextOf(a), contextB = contextOf(b);
+      bool ran[2];
+      runStrategiesTogether(*a.strategy, contextA, *b.strategy, contextB, ran);
+      a.candidate.ran = ran[0];
+      b.candidate.ran = ran[1];
+      finishLane(a);
+      finishLane(b);
+    }
+    if (k < pairOrder_.size()) runLane(pairOrder_[k]);
   }
   if (!settings_.keepCandidates) evaluateUntilBeaten(frame);
   // The winner, in strategy order (ties to the earlier strategy).

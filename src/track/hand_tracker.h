@@ -79,6 +79,7 @@ class HandTracker {
     Candidate candidate;
   };
   std::vector<std::unique_ptr<Lane>> lanes_;
+  std::vector<int> pairOrder_;  // lanes by decreasing run length, paired in turn
   WorkerPool* pool_ = nullptr;  // runs the lanes; null: in order on the caller
   physics::WorldState start_, best_;
   model::ModelPose pose_;

@@ -77,8 +77,12 @@ class Simulator {
   // Computes and keeps the mapping of the frame's points at the rig's current poses, for
   // the simulators that share it.
   void mapFrameStart(const HandRig& rig, const FrameInput& input);
-  // Runs `substeps` physics steps of the rig on the frame's data.
+  // Runs `substeps` physics steps of the rig on the frame's data: each is prepareStep, then
+  // the world's step.
   void run(HandRig& rig, const FrameInput& input, int substeps);
+  // Everything of a physics step but the step itself: maps the points (one subset, in turn)
+  // and fills the world's surface, line-of-sight, silhouette, hold and boundary rows.
+  void prepareStep(HandRig& rig, const FrameInput& input) { addRows(rig, input); }
   // Refreshes `bodies` from the rig's current poses.
   void pose(const HandRig& rig, PosedBodies& bodies);
   // Per point of the last mapping pass, its nearest body by the planar query (-1: none):

@@ -15,7 +15,9 @@ class FeatureDetectionStrategy final : public Strategy {
  public:
   StrategyKind kind() const override { return StrategyKind::FeatureDetection; }
 
-  bool run(StrategyContext& c) override {
+  int steps(int substeps) const override { return substeps + 1; }
+
+  bool begin(StrategyContext& c) override {
     if (c.detection == nullptr || !c.detection->fired) return false;
     const auto& anatomy = c.rig.anatomy();
     labelled_.clear();
@@ -24,16 +26,20 @@ class FeatureDetectionStrategy final : public Strategy {
       labelled_.push_back(
           {c.detection->tips[static_cast<std::size_t>(f)], BodyMask{1} << tipBody, kLabelCapScale});
     }
-    FrameInput input = c.input;
-    input.labelled = labelled_;
-    c.simulator.run(c.rig, input, c.substeps);
-    // Then let go of the labels so the result also fits the rest of the data.
-    c.simulator.run(c.rig, c.input, 1);
+    labelledInput_ = c.input;
+    labelledInput_.labelled = labelled_;
     return true;
+  }
+
+  const FrameInput* beforeStep(StrategyContext& c, int step) override {
+    if (step < c.substeps) return &labelledInput_;
+    // Then one step without the labels, so the result also fits the rest of the data.
+    return step == c.substeps ? &c.input : nullptr;
   }
 
  private:
   std::vector<LabelledPoint> labelled_;
+  FrameInput labelledInput_;
 };
 
 }  // namespace

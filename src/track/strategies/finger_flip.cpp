@@ -27,7 +27,9 @@ class FingerFlipStrategy final : public Strategy {
  public:
   StrategyKind kind() const override { return StrategyKind::FingerFlip; }
 
-  bool run(StrategyContext& c) override {
+  int steps(int substeps) const override { return 2 * substeps; }
+
+  bool begin(StrategyContext& c) override {
     if (c.startAngles == nullptr) return false;
     const auto& model = c.rig.model();
     const auto& anatomy = c.rig.anatomy();
@@ -58,10 +60,13 @@ class FingerFlipStrategy final : public Strategy {
         joints_.push_back(j);
       }
     }
-    c.simulator.run(c.rig, c.input, c.substeps);
-    for (int j : joints_) world.clearJointDrive(j);
-    c.simulator.run(c.rig, c.input, c.substeps);
     return true;
+  }
+
+  const FrameInput* beforeStep(StrategyContext& c, int step) override {
+    if (step == c.substeps)
+      for (int j : joints_) c.rig.world().clearJointDrive(j);
+    return step < 2 * c.substeps ? &c.input : nullptr;
   }
 
  private:

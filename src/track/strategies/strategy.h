@@ -2,8 +2,10 @@
 // the physics fit for the current frame, starting from the previous frame's best
 // state. Strategies only bias the simulation (welds, cones, drives, labelled points)
 // and must leave the world's configuration as they found it; the shared Simulator and
-// the error metric do the rest. To add one: a file here, a StrategyKind, and a line in
-// makeStrategy().
+// the error metric do the rest. A strategy says what each physics step of its run is
+// (beforeStep), and the tracker runs the steps: one run alone, or two runs side by side
+// with their worlds stepped together (the same bits, less time). To add one: a file here,
+// a StrategyKind, and a line in makeStrategy().
 #pragma once
 
 #include <memory>
@@ -29,10 +31,25 @@ class Strategy {
  public:
   virtual ~Strategy() = default;
   virtual StrategyKind kind() const = 0;
-  // Runs the simulation; false when it had nothing to do (no candidate this frame).
-  virtual bool run(StrategyContext& context) = 0;
+  // Physics steps of a run with `substeps` per phase (for pairing runs of equal length).
+  virtual int steps(int substeps) const = 0;
+  // Sets up this frame's run; false when there is nothing to do (no candidate this frame).
+  virtual bool begin(StrategyContext& context) = 0;
+  // Before physics step `step` (0, 1, ...) of the run: configures the world for it and
+  // returns the input its rows come from; nullptr once the run is over, the world's
+  // configuration then back as begin() found it.
+  virtual const FrameInput* beforeStep(StrategyContext& context, int step) = 0;
 };
 
 std::unique_ptr<Strategy> makeStrategy(StrategyKind kind);
+
+// Runs a strategy: begin(), then each step (Simulator::prepareStep, World::step) until
+// beforeStep() ends the run. false when begin() was.
+bool runStrategy(Strategy& strategy, StrategyContext& context);
+// Runs two strategies, each on its own rig and simulator, step by step side by side: while
+// both have a step, their worlds step together (physics::World::stepTogether). The same
+// bits as running one after the other. ran[k]: what strategy k's begin() returned.
+void runStrategiesTogether(Strategy& a, StrategyContext& contextA, Strategy& b,
+                           StrategyContext& contextB, bool ran[2]);
 
 }  // namespace dynahand::track

@@ -270,8 +270,8 @@ class World {
 
  private:
   // step() in parts (solver.cpp), so that stepTogether can interleave two worlds' sweeps:
-  // slots, rows and warm start; positions integrated and joints projected; impulses stored
-  // and the state written back. Between them, the sweeps.
+  // slots, rows and warm start; positions integrated (then the joints projected); impulses
+  // stored and the state written back. Between them, the sweeps.
   void beginStep(float h);
   void solveJointAndContactRows(bool useBias);  // one sweep of all but the surface rows
   void integrate(float h);

@@ -7,9 +7,9 @@
 // Position error C enters as bias = erp C / dt (rows that must reach C = 0) or, for one-sided
 // rows (C >= 0) that are not yet violated, as the speculative bias C / dt (the row only acts
 // if the velocity would cross the boundary within this step). The relax sweeps drop the erp
-// part so the correction velocity does not survive as momentum.
+// part so the correction velocity does not survive as momentum. World::stepTogether runs two
+// worlds' sweeps side by side, each in its own order (the same bits as stepping them alone).
 #include <algorithm>
-#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -98,19 +98,35 @@ inline void solveRow(std::vector<SolverBody>& sb, std::vector<Row>& rows, Row& r
 // One sweep over the rows in build order; later rows get the last word (joints and limits
 // after drives, so a drive can never push through a limit). A block (one contact manifold)
 // is iterated blockPasses times in place.
-void solveRows(std::vector<SolverBody>& sb, std::vector<Row>& rows, bool useBias) {
-  const std::size_t count = rows.size();
-  for (std::size_t i = 0; i < count;) {
-    const auto size = static_cast<std::size_t>(rows[i].blockSize);
-    const int passes = rows[i].blockPasses;
-    for (int pass = 0; pass < passes; ++pass) {
-      for (std::size_t k = i; k < i + size; ++k) {
-        Row& r = rows[k];
-        if (useBias || r.relax) solveRow(sb, rows, r, useBias);
-      }
+// The block of rows starting at row i, all its passes; returns the index after it.
+inline std::size_t solveRowBlock(std::vector<SolverBody>& sb, std::vector<Row>& rows,
+                                 std::size_t i, bool useBias) {
+  const auto size = static_cast<std::size_t>(rows[i].blockSize);
+  const int passes = rows[i].blockPasses;
+  for (int pass = 0; pass < passes; ++pass) {
+    for (std::size_t k = i; k < i + size; ++k) {
+      Row& r = rows[k];
+      if (useBias || r.relax) solveRow(sb, rows, r, useBias);
     }
-    i += size;
   }
+  return i + size;
+}
+
+void solveRows(std::vector<SolverBody>& sb, std::vector<Row>& rows, bool useBias) {
+  for (std::size_t i = 0; i < rows.size();) i = solveRowBlock(sb, rows, i, useBias);
+}
+
+// solveRows of two worlds, block by block in turn: each world's rows in their own order (the
+// same bits), the two chains of dependent rows overlapping in the CPU.
+void solveRowsTogether(std::vector<SolverBody>& sbA, std::vector<Row>& rowsA,
+                       std::vector<SolverBody>& sbB, std::vector<Row>& rowsB, bool useBias) {
+  std::size_t a = 0, b = 0;
+  while (a < rowsA.size() && b < rowsB.size()) {
+    a = solveRowBlock(sbA, rowsA, a, useBias);
+    b = solveRowBlock(sbB, rowsB, b, useBias);
+  }
+  while (a < rowsA.size()) a = solveRowBlock(sbA, rowsA, a, useBias);
+  while (b < rowsB.size()) b = solveRowBlock(sbB, rowsB, b, useBias);
 }
 
 Mat3 invInertiaMatrix(const SolverBody& b) {
@@ -129,56 +145,85 @@ inline void applyPointImpulse(std::vector<SolverBody>& sb, const World::Impl::Po
   b.w += applyInvInertia(b, p.rB.cross(impulse));
 }
 
+inline void solvePointBlock(std::vector<SolverBody>& sb, World::Impl::PointBlock& p,
+                            bool useBias) {
+  const SolverBody& a = sb[static_cast<std::size_t>(p.slotA)];
+  const SolverBody& b = sb[static_cast<std::size_t>(p.slotB)];
+  const Vec3 cdot = (b.v + b.w.cross(p.rB)) - (a.v + a.w.cross(p.rA));
+  const Vec3 d = -(p.invK * (useBias ? Vec3(cdot + p.bias) : cdot));
+  p.impulse += d;
+  applyPointImpulse(sb, p, d);
+}
+
 void solvePointBlocks(std::vector<SolverBody>& sb, std::vector<World::Impl::PointBlock>& blocks,
                       bool useBias) {
-  for (World::Impl::PointBlock& p : blocks) {
-    const SolverBody& a = sb[static_cast<std::size_t>(p.slotA)];
-    const SolverBody& b = sb[static_cast<std::size_t>(p.slotB)];
-    const Vec3 cdot = (b.v + b.w.cross(p.rB)) - (a.v + a.w.cross(p.rA));
-    const Vec3 d = -(p.invK * (useBias ? Vec3(cdot + p.bias) : cdot));
-    p.impulse += d;
-    applyPointImpulse(sb, p, d);
+  for (World::Impl::PointBlock& p : blocks) solvePointBlock(sb, p, useBias);
+}
+
+// solvePointBlocks of two worlds, block by block in turn (as solveRowsTogether).
+void solvePointBlocksTogether(std::vector<SolverBody>& sbA,
+                              std::vector<World::Impl::PointBlock>& blocksA,
+                              std::vector<SolverBody>& sbB,
+                              std::vector<World::Impl::PointBlock>& blocksB, bool useBias) {
+  const std::size_t both = std::min(blocksA.size(), blocksB.size());
+  for (std::size_t i = 0; i < both; ++i) {
+    solvePointBlock(sbA, blocksA[i], useBias);
+    solvePointBlock(sbB, blocksB[i], useBias);
   }
+  for (std::size_t i = both; i < blocksA.size(); ++i) solvePointBlock(sbA, blocksA[i], useBias);
+  for (std::size_t i = both; i < blocksB.size(); ++i) solvePointBlock(sbB, blocksB[i], useBias);
 }
 
 // Nonlinear Gauss-Seidel on the joint anchors (Box2D v2's position solver, block 3x3):
 // K = (mA^-1 + mB^-1) 1 - [rA] IA^-1 [rA] - [rB] IB^-1 [rB],  P = -K^-1 C, applied to positions
 // and orientations only, with the arms re-evaluated at the current orientations.
-void projectJointPositions(World::Impl& m, int iterations) {
+// One joint of projectJointPositions' pass.
+inline void projectJoint(World::Impl& m, std::size_t idx) {
   auto rotate = [](Quat& q, const Vec3& angle) {
     const Quat dq(0.0f, 0.5f * angle.x(), 0.5f * angle.y(), 0.5f * angle.z());
     q.coeffs() += (dq * q).coeffs();
     q.normalize();
   };
-  const std::size_t count = m.jointPositions.size();
-  for (int it = 0; it < iterations; ++it) {
-    for (std::size_t idx = 0; idx < count; ++idx) {
-      const World::Impl::JointPosition& jp = m.jointPositions[idx];
-      const auto ia = static_cast<std::size_t>(jp.slotA), ib = static_cast<std::size_t>(jp.slotB);
-      const SolverBody& a = m.solverBodies[ia];
-      const SolverBody& b = m.solverBodies[ib];
-      const Vec3 rA = m.slotOrientation[ia] * jp.armA;
-      const Vec3 rB = m.slotOrientation[ib] * jp.armB;
-      const Vec3 c = (m.slotPosition[ib] + rB) - (m.slotPosition[ia] + rA);
-      Mat3 invIA, invIB;
-      invIA << a.ixx, a.ixy, a.ixz, a.ixy, a.iyy, a.iyz, a.ixz, a.iyz, a.izz;
-      invIB << b.ixx, b.ixy, b.ixz, b.ixy, b.iyy, b.iyz, b.ixz, b.iyz, b.izz;
-      const Mat3 sA = skew(rA), sB = skew(rB);
-      const Mat3 k = (a.invMass + b.invMass) * Mat3::Identity() - sA * invIA * sA - sB * invIB * sB;
-      if (!(std::abs(k.determinant()) > 1e-20f)) continue;
-      // Large errors are closed over several steps (a projection is only good for small ones).
-      const float len = c.norm();
-      const Vec3 clampedError =
-          len > kMaxJointCorrection ? Vec3(c * (kMaxJointCorrection / len)) : c;
-      const Vec3 p = -(k.inverse() * clampedError);
-      m.slotPosition[ia] -= a.invMass * p;
-      rotate(m.slotOrientation[ia], -(invIA * rA.cross(p)));
-      m.slotPosition[ib] += b.invMass * p;
-      rotate(m.slotOrientation[ib], invIB * rB.cross(p));
-    }
-  }
+  const World::Impl::JointPosition& jp = m.jointPositions[idx];
+  const auto ia = static_cast<std::size_t>(jp.slotA), ib = static_cast<std::size_t>(jp.slotB);
+  const SolverBody& a = m.solverBodies[ia];
+  const SolverBody& b = m.solverBodies[ib];
+  const Vec3 rA = m.slotOrientation[ia] * jp.armA;
+  const Vec3 rB = m.slotOrientation[ib] * jp.armB;
+  const Vec3 c = (m.slotPosition[ib] + rB) - (m.slotPosition[ia] + rA);
+  Mat3 invIA, invIB;
+  invIA << a.ixx, a.ixy, a.ixz, a.ixy, a.iyy, a.iyz, a.ixz, a.iyz, a.izz;
+  invIB << b.ixx, b.ixy, b.ixz, b.ixy, b.iyy, b.iyz, b.ixz, b.iyz, b.izz;
+  const Mat3 sA = skew(rA), sB = skew(rB);
+  const Mat3 k = (a.invMass + b.invMass) * Mat3::Identity() - sA * invIA * sA - sB * invIB * sB;
+  if (!(std::abs(k.determinant()) > 1e-20f)) return;
+  // Large errors are closed over several steps (a projection is only good for small ones).
+  const float len = c.norm();
+  const Vec3 clampedError = len > kMaxJointCorrection ? Vec3(c * (kMaxJointCorrection / len)) : c;
+  const Vec3 p = -(k.inverse() * clampedError);
+  m.slotPosition[ia] -= a.invMass * p;
+  rotate(m.slotOrientation[ia], -(invIA * rA.cross(p)));
+  m.slotPosition[ib] += b.invMass * p;
+  rotate(m.slotOrientation[ib], invIB * rB.cross(p));
 }
 
+void projectJointPositions(World::Impl& m, int iterations) {
+  for (int it = 0; it < iterations; ++it)
+    for (std::size_t idx = 0; idx < m.jointPositions.size(); ++idx) projectJoint(m, idx);
+}
+
+// projectJointPositions of two worlds, joint by joint in turn (as solveRowsTogether).
+void projectJointPositionsTogether(World::Impl& a, World::Impl& b, int iterations) {
+  const std::size_t both = std::min(a.jointPositions.size(), b.jointPositions.size());
+  for (int it = 0; it < iterations; ++it) {
+    for (std::size_t idx = 0; idx < both; ++idx) {
+      projectJoint(a, idx);
+      projectJoint(b, idx);
+    }
+    for (std::size_t idx = both; idx < a.jointPositions.size(); ++idx) projectJoint(a, idx);
+    for (std::size_t idx = both; idx < b.jointPositions.size(); ++idx) projectJoint(b, idx);
+  }
+}
 }  // namespace
 
 namespace {
@@ -205,194 +250,6 @@ class FlushDenormals {
 };
 }  // namespace
 
-namespace {
-// A body point given relative to the centre of mass (body axes): its world position, and its
-// arm from the centre of the solver slot moving it (the body's, or its weld group's).
-Vec3 armOf(const World::Impl& m, const WorldState& s, std::size_t body, const Vec3& comLocal,
-           Vec3* world) {
-  *world = s.position[body] + s.orientation[body] * comLocal;
-  return *world - m.slotPosition[static_cast<std::size_t>(m.slotOf(s, static_cast<BodyId>(body)))];
-}
-
-// One surface row, prepared for the batches (the scalar reference of prepareSurfaceRows).
-void prepareSurfaceRow(World::Impl& m, const WorldState& s, const SurfaceRows& rows,
-                       std::size_t i, float erp, float invH) {
-  const auto body = static_cast<std::size_t>(rows.body[i]);
-  assert(body < m.bodies.size() && "surface row: bad body");
-  const int slot = m.slotOf(s, static_cast<BodyId>(body));
-  const SolverBody& b = m.solverBodies[static_cast<std::size_t>(slot)];
-  Vec3 world;
-  const Vec3 r = armOf(m, s, body, rows.anchor[i] - m.bodies[body].centroid, &world);
-  const Vec3& nrm = rows.normal[i];
-  const Vec3 ang = r.cross(nrm);
-  const Vec3 invIAng = applyInvInertia(b, ang);
-  const float k = b.invMass * nrm.squaredNorm() + ang.dot(invIAng);
-  const float c = nrm.dot(world - rows.target[i]);
-  const Bias bias =
-      rows.lower[i] >= 0.0f ? oneSidedBias(c, erp, invH) : twoSidedBias(c, erp, invH);
-  m.surfaceRows[i] = {slot,       nrm,        ang,           invIAng,      k > 0.0f ? 1.0f / k : 0.0f,
-                      bias.solve, bias.relax, rows.lower[i], rows.upper[i]};
-}
-
-#if defined(__SSE__)
-// Four rows of one body at once, the same arithmetic operation for operation (no fused or
-// reordered operations), so the same bits as prepareSurfaceRow.
-struct SurfaceRowsOfBody {
-  __m128 qx, qy, qz, qw, px, py, pz, cx, cy, cz, sx, sy, sz;
-  __m128 invMass, ixx, iyy, izz, ixy, ixz, iyz;
-  int slot;
-
-  SurfaceRowsOfBody(const World::Impl& m, const WorldState& s, std::size_t body) {
-    slot = m.slotOf(s, static_cast<BodyId>(body));
-    const SolverBody& b = m.solverBodies[static_cast<std::size_t>(slot)];
-    const Quat& q = s.orientation[body];
-    const Vec3& p = s.position[body];
-    const Vec3& c = m.bodies[body].centroid;
-    const Vec3& sp = m.slotPosition[static_cast<std::size_t>(slot)];
-    qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
-    qw = _mm_set1_ps(q.w());
-    px = _mm_set1_ps(p.x()), py = _mm_set1_ps(p.y()), pz = _mm_set1_ps(p.z());
-    cx = _mm_set1_ps(c.x()), cy = _mm_set1_ps(c.y()), cz = _mm_set1_ps(c.z());
-    sx = _mm_set1_ps(sp.x()), sy = _mm_set1_ps(sp.y()), sz = _mm_set1_ps(sp.z());
-    invMass = _mm_set1_ps(b.invMass);
-    ixx = _mm_set1_ps(b.ixx), iyy = _mm_set1_ps(b.iyy), izz = _mm_set1_ps(b.izz);
-    ixy = _mm_set1_ps(b.ixy), ixz = _mm_set1_ps(b.ixz), iyz = _mm_set1_ps(b.iyz);
-  }
-
-  // Rows index[0..3] (all on this body) into m.surfaceRows.
-  void prepare(World::Impl& m, const SurfaceRows& rows, const int* index, float erp,
-               float invH) const {
-    const auto i0 = static_cast<std::size_t>(index[0]), i1 = static_cast<std::size_t>(index[1]),
-               i2 = static_cast<std::size_t>(index[2]), i3 = static_cast<std::size_t>(index[3]);
-    auto gather = [&](const std::vector<Vec3>& v, __m128& x, __m128& y, __m128& z) {
-      __m128 a = _mm_setr_ps(v[i0].x(), v[i0].y(), v[i0].z(), 0.0f);
-      __m128 b = _mm_setr_ps(v[i1].x(), v[i1].y(), v[i1].z(), 0.0f);
-      __m128 c = _mm_setr_ps(v[i2].x(), v[i2].y(), v[i2].z(), 0.0f);
-      __m128 d = _mm_setr_ps(v[i3].x(), v[i3].y(), v[i3].z(), 0.0f);
-      _MM_TRANSPOSE4_PS(a, b, c, d);
-      x = a, y = b, z = c;
-    };
-    const auto add = [](__m128 a, __m128 b) { return _mm_add_ps(a, b); };
-    const auto sub = [](__m128 a, __m128 b) { return _mm_sub_ps(a, b); };
-    const auto mul = [](__m128 a, __m128 b) { return _mm_mul_ps(a, b); };
-    __m128 ax, ay, az, nx, ny, nz, tx, ty, tz;
-    gather(rows.anchor, ax, ay, az);
-    gather(rows.normal, nx, ny, nz);
-    gather(rows.target, tx, ty, tz);
-    const __m128 lower = _mm_setr_ps(rows.lower[i0], rows.lower[i1], rows.lower[i2], rows.lower[i3]);
-    const __m128 upper = _mm_setr_ps(rows.upper[i0], rows.upper[i1], rows.upper[i2], rows.upper[i3]);
-    // comLocal = anchor - centroid; world = position + q * comLocal (Eigen's
-    // _transformVector: uv = q.vec × v, uv += uv, v + w uv + q.vec × uv).
-    const __m128 lx = sub(ax, cx), ly = sub(ay, cy), lz = sub(az, cz);
-    __m128 ux = sub(mul(qy, lz), mul(qz, ly)), uy = sub(mul(qz, lx), mul(qx, lz)),
-           uz = sub(mul(qx, ly), mul(qy, lx));
-    ux = add(ux, ux), uy = add(uy, uy), uz = add(uz, uz);
-    const __m128 rx = add(add(lx, mul(qw, ux)), sub(mul(qy, uz), mul(qz, uy)));
-    const __m128 ry = add(add(ly, mul(qw, uy)), sub(mul(qz, ux), mul(qx, uz)));
-    const __m128 rz = add(add(lz, mul(qw, uz)), sub(mul(qx, uy), mul(qy, ux)));
-    const __m128 wx = add(px, rx), wy = add(py, ry), wz = add(pz, rz);
-    const __m128 armX = sub(wx, sx), armY = sub(wy, sy), armZ = sub(wz, sz);
-    // ang = arm × normal; invIAng = the inverse inertia times ang.
-    const __m128 gx = sub(mul(armY, nz), mul(armZ, ny));
-    const __m128 gy = sub(mul(armZ, nx), mul(armX, nz));
-    const __m128 gz = sub(mul(armX, ny), mul(armY, nx));
-    const __m128 jx = add(add(mul(ixx, gx), mul(ixy, gy)), mul(ixz, gz));
-    const __m128 jy = add(add(mul(ixy, gx), mul(iyy, gy)), mul(iyz, gz));
-    const __m128 jz = add(add(mul(ixz, gx), mul(iyz, gy)), mul(izz, gz));
-    // Eigen's dot and squaredNorm of 3-vectors sum as x + (y + z).
-    const __m128 k = add(mul(invMass, add(mul(nx, nx), add(mul(ny, ny), mul(nz, nz)))),
-                         add(mul(gx, jx), add(mul(gy, jy), mul(gz, jz))));
-    const __m128 effMass =
-        _mm_and_ps(_mm_cmpgt_ps(k, _mm_setzero_ps()), _mm_div_ps(_mm_set1_ps(1.0f), k));
-    const __m128 c = add(mul(nx, sub(wx, tx)), add(mul(ny, sub(wy, ty)), mul(nz, sub(wz, tz))));
-    // Bias (rows.h): one-sided rows (lower >= 0) ahead of the surface keep c / h in both
-    // sweeps; otherwise erp c / h, and no relax bias.
-    const __m128 ahead = _mm_and_ps(_mm_cmpge_ps(lower, _mm_setzero_ps()),
-                                    _mm_cmpgt_ps(c, _mm_setzero_ps()));
-    const __m128 speculative = mul(c, _mm_set1_ps(invH));
-    const __m128 closing = mul(mul(_mm_set1_ps(erp), c), _mm_set1_ps(invH));
-    const __m128 solve =
-        _mm_or_ps(_mm_and_ps(ahead, speculative), _mm_andnot_ps(ahead, closing));
-    const __m128 relax = _mm_and_ps(ahead, speculative);
-    alignas(16) float out[14][4];
-    const __m128 fields[14] = {nx, ny, nz, gx, gy, gz, jx, jy, jz, effMass, solve, relax, lower, upper};
-    for (int f = 0; f < 14; ++f) _mm_store_ps(out[f], fields[f]);
-    for (int lane = 0; lane < 4; ++lane) {
-      PreparedSurfaceRow& row = m.surfaceRows[static_cast<std::size_t>(index[lane])];
-      row.slot = slot;
-      row.normal = Vec3(out[0][lane], out[1][lane], out[2][lane]);
-      row.ang = Vec3(out[3][lane], out[4][lane], out[5][lane]);
-      row.invIAng = Vec3(out[6][lane], out[7][lane], out[8][lane]);
-      row.effMass = out[9][lane];
-      row.bias = out[10][lane];
-      row.relaxBias = out[11][lane];
-      row.lower = out[12][lane];
-      row.upper = out[13][lane];
-    }
-  }
-};
-#endif
-
-// The tracker's thousand surface rows, prepared for the batches: body by body, four rows at a
-// time with SSE (the same bits as one at a time), the rest one by one.
-std::atomic<bool> wideSurfacePrepare{true};
-
-[[gnu::noinline]] void prepareSurfaceRows(World::Impl& m, const WorldState& s,
-                                          const SurfaceRows& rows, float erp, float invH) {
-  const std::size_t count = rows.body.size();
-  m.surfaceRows.resize(count);
-#if defined(__SSE__)
-  if (!wideSurfacePrepare.load(std::memory_order_relaxed)) {
-    for (std::size_t i = 0; i < count; ++i) prepareSurfaceRow(m, s, rows, i, erp, invH);
-    return;
-  }
-  // Rows grouped by body (counting sort).
-  const std::size_t bodies = m.bodies.size();
-  std::vector<int>& start = m.surfaceBodyStart;
-  std::vector<int>& order = m.surfaceRowsByBody;
-  start.assign(bodies + 1, 0);
-  for (std::size_t i = 0; i < count; ++i) {
-    assert(static_cast<std::size_t>(rows.body[i]) < bodies && "surface row: bad body");
-    ++start[static_cast<std::size_t>(rows.body[i]) + 1];
-  }
-  for (std::size_t b = 0; b < bodies; ++b) start[b + 1] += start[b];
-  order.resize(count);
-  {
-    std::vector<int>& next = m.surfaceBodyStart;
-    for (std::size_t i = 0; i < count; ++i)
-      order[static_cast<std::size_t>(next[static_cast<std::size_t>(rows.body[i])]++)] =
-          static_cast<int>(i);
-    // next[b] is now the end of body b's rows, i.e. the start of body b + 1's.
-    for (std::size_t b = bodies; b > 0; --b) next[b] = next[b - 1];
-    next[0] = 0;
-  }
-  for (std::size_t b = 0; b < bodies; ++b) {
-    const auto first = static_cast<std::size_t>(start[b]);
-    const auto end = static_cast<std::size_t>(start[b + 1]);
-    std::size_t j = first;
-    if (end - first >= 4) {
-      const SurfaceRowsOfBody body(m, s, b);
-      for (; j + 4 <= end; j += 4) body.prepare(m, rows, &order[j], erp, invH);
-    }
-    for (; j < end; ++j)
-      prepareSurfaceRow(m, s, rows, static_cast<std::size_t>(order[j]), erp, invH);
-  }
-#else
-  for (std::size_t i = 0; i < count; ++i) prepareSurfaceRow(m, s, rows, i, erp, invH);
-#endif
-}
-}  // namespace
-
-bool World::useWideSurfacePrepare(bool enabled) {
-#if defined(__SSE__)
-  wideSurfacePrepare.store(enabled);
-#else
-  wideSurfacePrepare.store(false);
-  (void)enabled;
-#endif
-  return wideSurfacePrepare.load();
-}
-
 void World::step(float h) {
   assert(h > 0.0f && std::isfinite(h) && "step: dt must be positive");
   const FlushDenormals flushDenormals;
@@ -402,6 +259,7 @@ void World::step(float h) {
     solveJointAndContactRows(true);
   }
   integrate(h);
+  projectJointPositions(*impl_, settings_.positionIterations);
   for (int it = 0; it < settings_.relaxIterations; ++it) {
     impl_->surfaceBatches.solve(impl_->solverBodies, false);
     solveJointAndContactRows(false);
@@ -413,6 +271,7 @@ void World::stepTogether(World& a, World& b, float h) {
   assert(h > 0.0f && std::isfinite(h) && "stepTogether: dt must be positive");
   if (&a == &b || a.settings_.iterations != b.settings_.iterations ||
       a.settings_.relaxIterations != b.settings_.relaxIterations ||
+      a.settings_.positionIterations != b.settings_.positionIterations ||
       !SurfaceBatches::canSolveTogether()) {
     a.step(h);
     b.step(h);
@@ -426,16 +285,19 @@ void World::stepTogether(World& a, World& b, float h) {
   for (int it = 0; it < a.settings_.iterations; ++it) {
     SurfaceBatches::solveTogether(ma.surfaceBatches, ma.solverBodies, mb.surfaceBatches,
                                   mb.solverBodies, true);
-    a.solveJointAndContactRows(true);
-    b.solveJointAndContactRows(true);
+    solveRowsTogether(ma.solverBodies, ma.rows, mb.solverBodies, mb.rows, true);
+    solvePointBlocksTogether(ma.solverBodies, ma.pointBlocks, mb.solverBodies, mb.pointBlocks,
+                             true);
   }
   a.integrate(h);
   b.integrate(h);
+  projectJointPositionsTogether(ma, mb, a.settings_.positionIterations);
   for (int it = 0; it < a.settings_.relaxIterations; ++it) {
     SurfaceBatches::solveTogether(ma.surfaceBatches, ma.solverBodies, mb.surfaceBatches,
                                   mb.solverBodies, false);
-    a.solveJointAndContactRows(false);
-    b.solveJointAndContactRows(false);
+    solveRowsTogether(ma.solverBodies, ma.rows, mb.solverBodies, mb.rows, false);
+    solvePointBlocksTogether(ma.solverBodies, ma.pointBlocks, mb.solverBodies, mb.pointBlocks,
+                             false);
   }
   a.endStep();
   b.endStep();
@@ -712,7 +574,6 @@ void World::integrate(float h) {
     q.coeffs() += (dq * q).coeffs();
     q.normalize();
   }
-  projectJointPositions(m, settings_.positionIterations);
 }
 
 void World::endStep() {

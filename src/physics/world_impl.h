@@ -156,4 +156,17 @@ struct World::Impl {
   }
 };
 
+// A body point given relative to the centre of mass (body axes): its world position, and its
+// arm from the centre of the solver slot moving it (the body's, or its weld group's).
+inline Vec3 armOf(const World::Impl& m, const WorldState& s, std::size_t body,
+                  const Vec3& comLocal, Vec3* world) {
+  *world = s.position[body] + s.orientation[body] * comLocal;
+  return *world - m.slotPosition[static_cast<std::size_t>(m.slotOf(s, static_cast<BodyId>(body)))];
+}
+
+// The step's surface rows into m.surfaceRows (surface_prepare.cpp): arms, inverse-inertia
+// products, effective masses and biases, at the slots' current velocities and inertia.
+void prepareSurfaceRows(World::Impl& m, const WorldState& s, const SurfaceRows& rows, float erp,
+                        float invH);
+
 }  // namespace dynahand::physics

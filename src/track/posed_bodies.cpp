@@ -188,17 +188,17 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
   __m256 plane = _mm256_setzero_ps();
   const __m256 one = _mm256_set1_ps(1.0f);
   const __m256 stopAbove = _mm256_load_ps(stop);
-  __m256 beyond = _mm256_setzero_ps();  // lanes with a plane farther than their stop
   for (std::size_t f = 0; f < count; ++f) {
     const __m256 d =
         planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
                        _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
     keepLargest(d, plane, best, index);
     plane = _mm256_add_ps(plane, one);
-    // Once every lane has a plane beyond its stop, none of them can win: give up (the caller
-    // sees a distance above the stop, as with maxPlaneDistance's early return).
-    beyond = _mm256_or_ps(beyond, _mm256_cmp_ps(d, stopAbove, _CMP_GT_OQ));
-    if ((f & 7) == 7 && _mm256_movemask_ps(beyond) == 0xFF) break;
+    // Once every lane has a plane beyond its stop (its largest so far is), none of them can
+    // win: give up (the caller sees a distance above the stop, as with maxPlaneDistance's
+    // early return).
+    if ((f & 7) == 7 && _mm256_movemask_ps(_mm256_cmp_ps(best, stopAbove, _CMP_GT_OQ)) == 0xFF)
+      break;
   }
   // The lane's maximum is its face's distance by the scalar formula's arithmetic (same
   // operations in the same order), so callers need not recompute it.

@@ -208,19 +208,50 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
   for (int k = 0; k < 8; ++k) face[k] = static_cast<std::int32_t>(indexOut[k]);
 }
 
-// Per lane of eight points: whether body b (centre c, radius r) could still beat or tie the
-// best so far, i.e. not sphereGap > best (sphereGap's arithmetic), and is not the body the
-// point was tested against first (`first`, as floats). A mask of 8 bits.
-__attribute__((target("avx"))) int reachableEightAvx(const float* px, const float* py,
-                                                     const float* pz, const float* best,
-                                                     const float* first, float b, float cx,
-                                                     float cy, float cz, float r) {
-  const __m256 gap =
-      sphereGap8(_mm256_loadu_ps(px), _mm256_loadu_ps(py), _mm256_loadu_ps(pz), _mm256_set1_ps(cx),
-                 _mm256_set1_ps(cy), _mm256_set1_ps(cz), _mm256_set1_ps(r));
-  const __m256 reachable = _mm256_cmp_ps(gap, _mm256_loadu_ps(best), _CMP_LE_OQ);
-  const __m256 other = _mm256_cmp_ps(_mm256_loadu_ps(first), _mm256_set1_ps(b), _CMP_NEQ_UQ);
-  return _mm256_movemask_ps(_mm256_and_ps(reachable, other));
+// Lane offsets of the set bits of an eight-bit mask, in order (the rest zero): a branch-free
+// compress of eight point indices.
+struct CompressTable {
+  alignas(32) std::int32_t lanes[256][8]{};
+  constexpr CompressTable() {
+    for (int mask = 0; mask < 256; ++mask) {
+      int n = 0;
+      for (int k = 0; k < 8; ++k) {
+        lanes[mask][k] = 0;
+        if (mask >> k & 1) lanes[mask][n++] = k;
+      }
+    }
+  }
+};
+constexpr CompressTable kCompress;
+
+// The points (of `padded`, the last eight holding `lastLanes` real ones) that body b (centre c,
+// radius r) could still beat or tie, i.e. not sphereGap > best (sphereGap's arithmetic), and
+// that were not tested against it first (`first`, as floats): their indices, in order, into
+// `list` (which has room for seven more past the count); returns the count.
+__attribute__((target("avx"))) int reachablePointsAvx(const float* px, const float* py,
+                                                      const float* pz, const float* best,
+                                                      const float* first, std::size_t padded,
+                                                      int lastLanes, float b, float cx, float cy,
+                                                      float cz, float r, int* list) {
+  const __m256 vcx = _mm256_set1_ps(cx), vcy = _mm256_set1_ps(cy), vcz = _mm256_set1_ps(cz);
+  const __m256 vr = _mm256_set1_ps(r), vb = _mm256_set1_ps(b);
+  int count = 0;
+  for (std::size_t start = 0; start < padded; start += 8) {
+    const __m256 gap = sphereGap8(_mm256_loadu_ps(px + start), _mm256_loadu_ps(py + start),
+                                  _mm256_loadu_ps(pz + start), vcx, vcy, vcz, vr);
+    const __m256 reachable = _mm256_cmp_ps(gap, _mm256_loadu_ps(best + start), _CMP_LE_OQ);
+    const __m256 other = _mm256_cmp_ps(_mm256_loadu_ps(first + start), vb, _CMP_NEQ_UQ);
+    int mask = _mm256_movemask_ps(_mm256_and_ps(reachable, other));
+    if (start + 8 == padded) mask &= lastLanes;
+    const __m128i base = _mm_set1_epi32(static_cast<int>(start));
+    const auto* lanes = reinterpret_cast<const __m128i*>(kCompress.lanes[mask]);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(list + count),
+                     _mm_add_epi32(base, _mm_load_si128(lanes)));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(list + count + 4),
+                     _mm_add_epi32(base, _mm_load_si128(lanes + 1)));
+    count += __builtin_popcount(static_cast<unsigned>(mask));
+  }
+  return count;
 }
 
 // Static initialisers may run before the library's own CPU detection: run it first.
@@ -540,24 +571,14 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
   // Then every other body whose sphere could still beat or tie a point's best (a tie goes to
   // the lower index, as in the one-point queries; testing a body that cannot win changes
   // nothing). The sphere gap is a lower bound on both the planar and the exact distance.
-  // Appended without branches: every lane's index is written, the count advances by the
-  // lane's bit (the reachable lanes are unpredictable).
+  // Appended without branches (the reachable lanes are unpredictable): eight indices
+  // compressed by a table, written whole, the count advanced by the mask's bits.
   const int lastLanes = (1 << (n - (padded - 8))) - 1;  // the real points of the last eight
   for (std::size_t b = 0; b < bodyCount; ++b) {
-    int* list = tests_.data() + b * padded;
-    int count = 0;
-    for (std::size_t start = 0; start < padded; start += 8) {
-      int mask = reachableEightAvx(px_.data() + start, py_.data() + start, pz_.data() + start,
-                                   bestDistance_.data() + start, first_.data() + start,
-                                   static_cast<float>(b), sphereX_[b], sphereY_[b], sphereZ_[b],
-                                   sphereR_[b]);
-      if (start + 8 == padded) mask &= lastLanes;
-      for (int k = 0; k < 8; ++k) {
-        list[count] = static_cast<int>(start) + k;
-        count += mask >> k & 1;
-      }
-    }
-    testCount_[b] = count;
+    testCount_[b] = reachablePointsAvx(px_.data(), py_.data(), pz_.data(), bestDistance_.data(),
+                                       first_.data(), padded, lastLanes, static_cast<float>(b),
+                                       sphereX_[b], sphereY_[b], sphereZ_[b], sphereR_[b],
+                                       tests_.data() + b * padded);
   }
   runTests();
 #endif

@@ -2,8 +2,10 @@
 // acquisition from scratch and the tracked/lost state.
 #pragma once
 
+#include <array>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -79,7 +81,12 @@ class HandTracker {
     Candidate candidate;
   };
   std::vector<std::unique_ptr<Lane>> lanes_;
-  std::vector<int> pairOrder_;  // lanes by decreasing run length, paired in turn
+  std::vector<int> pairOrder_;  // lanes by decreasing run length, run two at a time
+  // runStrategies' scratch, in pairOrder_ (no allocation per frame).
+  std::array<std::optional<StrategyContext>, kStrategyCount> laneContexts_;
+  std::array<Strategy*, kStrategyCount> laneStrategies_{};
+  std::array<StrategyContext*, kStrategyCount> laneContextPointers_{};
+  std::array<bool, kStrategyCount> laneRan_{};
   WorkerPool* pool_ = nullptr;  // runs the lanes; null: in order on the caller
   physics::WorldState start_, best_;
   model::ModelPose pose_;

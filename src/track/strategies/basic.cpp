@@ -1,7 +1,9 @@
 // The normal, gross-motion and grasp-bias simulations.
 #include "track/strategies/strategy.h"
 
+#include <cassert>
 #include <numeric>
+#include <span>
 #include <vector>
 
 namespace dynahand::track {
@@ -72,29 +74,51 @@ bool runStrategy(Strategy& strategy, StrategyContext& c) {
   }
 }
 
-void runStrategiesTogether(Strategy& a, StrategyContext& contextA, Strategy& b,
-                           StrategyContext& contextB, bool ran[2]) {
-  Strategy* strategy[2] = {&a, &b};
-  StrategyContext* context[2] = {&contextA, &contextB};
-  bool active[2];
-  for (int k = 0; k < 2; ++k) ran[k] = active[k] = strategy[k]->begin(*context[k]);
-  const float dt[2] = {contextA.simulator.settings().stepDt, contextB.simulator.settings().stepDt};
-  for (int step = 0; active[0] || active[1]; ++step) {
-    bool stepping[2] = {false, false};
+void runStrategiesTwoAtATime(std::span<Strategy* const> strategies,
+                             std::span<StrategyContext* const> contexts, std::span<bool> ran) {
+  assert(strategies.size() == contexts.size() && ran.size() == strategies.size());
+  std::size_t next = 0;  // the next strategy to start
+  int running[2] = {-1, -1};
+  int step[2] = {0, 0};
+  // Slot k takes the next strategy with something to do (-1 when none is left).
+  auto startNext = [&](int k) {
+    running[k] = -1;
+    while (next < strategies.size()) {
+      const std::size_t i = next++;
+      ran[i] = strategies[i]->begin(*contexts[i]);
+      if (ran[i]) {
+        running[k] = static_cast<int>(i);
+        step[k] = 0;
+        return;
+      }
+    }
+  };
+  startNext(0);
+  startNext(1);
+  while (running[0] >= 0 || running[1] >= 0) {
+    StrategyContext* stepping[2] = {nullptr, nullptr};
     for (int k = 0; k < 2; ++k) {
-      if (!active[k]) continue;
-      const FrameInput* input = strategy[k]->beforeStep(*context[k], step);
-      active[k] = stepping[k] = input != nullptr;
-      if (input != nullptr) context[k]->simulator.prepareStep(context[k]->rig, *input);
+      while (running[k] >= 0) {
+        StrategyContext& c = *contexts[static_cast<std::size_t>(running[k])];
+        const FrameInput* input =
+            strategies[static_cast<std::size_t>(running[k])]->beforeStep(c, step[k]);
+        if (input != nullptr) {
+          ++step[k];
+          c.simulator.prepareStep(c.rig, *input);
+          stepping[k] = &c;
+          break;
+        }
+        startNext(k);  // this run is over
+      }
     }
-    auto& worldA = contextA.rig.world();
-    auto& worldB = contextB.rig.world();
-    if (stepping[0] && stepping[1] && dt[0] == dt[1]) {
-      physics::World::stepTogether(worldA, worldB, dt[0]);
-    } else {
-      if (stepping[0]) worldA.step(dt[0]);
-      if (stepping[1]) worldB.step(dt[1]);
+    if (stepping[0] != nullptr && stepping[1] != nullptr &&
+        stepping[0]->simulator.settings().stepDt == stepping[1]->simulator.settings().stepDt) {
+      physics::World::stepTogether(stepping[0]->rig.world(), stepping[1]->rig.world(),
+                                   stepping[0]->simulator.settings().stepDt);
+      continue;
     }
+    for (StrategyContext* c : stepping)
+      if (c != nullptr) c->rig.world().step(c->simulator.settings().stepDt);
   }
 }
 

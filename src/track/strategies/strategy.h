@@ -9,6 +9,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 
 #include "dynahand/tracker.h"
 #include "track/finger_detector.h"
@@ -46,10 +47,11 @@ std::unique_ptr<Strategy> makeStrategy(StrategyKind kind);
 // Runs a strategy: begin(), then each step (Simulator::prepareStep, World::step) until
 // beforeStep() ends the run. false when begin() was.
 bool runStrategy(Strategy& strategy, StrategyContext& context);
-// Runs two strategies, each on its own rig and simulator, step by step side by side: while
-// both have a step, their worlds step together (physics::World::stepTogether). The same
-// bits as running one after the other. ran[k]: what strategy k's begin() returned.
-void runStrategiesTogether(Strategy& a, StrategyContext& contextA, Strategy& b,
-                           StrategyContext& contextB, bool ran[2]);
+// Runs strategies, each on its own rig and simulator, two at a time, step by step: while two
+// runs have a step, their worlds step together (physics::World::stepTogether); when a run
+// ends, the next strategy in order takes its place. The same bits as running them one after
+// the other. ran[i]: what strategy i's begin() returned.
+void runStrategiesTwoAtATime(std::span<Strategy* const> strategies,
+                             std::span<StrategyContext* const> contexts, std::span<bool> ran);
 
 }  // namespace dynahand::track

@@ -29,6 +29,9 @@ class ConvexShape {
   static ConvexShape box(const Vec3& halfExtents);
 
   const std::vector<Vec3>& vertices() const { return vertices_; }  // hull vertices, m
+  // direction·v for every hull vertex v into out (vertices().size() floats), four at a time,
+  // with the same bits as Vec3::dot.
+  void vertexHeights(const Vec3& direction, float* out) const;
   const std::vector<Face>& faces() const { return faces_; }
 
   float volume() const { return volume_; }     // m^3
@@ -68,6 +71,7 @@ class ConvexShape {
   float nearestEdge(const Vec3& p, int* edge, float* t) const;
 
   std::vector<Vec3> vertices_;
+  std::vector<float> vertexX_, vertexY_, vertexZ_;  // vertices_ as SoA
   std::vector<Face> faces_;
   // Every hull edge once, as start point a, direction d = b - a and 1 / |d|^2, SoA padded to a
   // multiple of four with far zero-length edges: an outside point whose foot misses its

@@ -180,6 +180,14 @@ void ConvexShape::buildEdges() {
     if (i > 0 && halfEdges[i].first == halfEdges[i - 1].first) continue;
     edges_.push_back({halfEdges[i].first.first, halfEdges[i].first.second, halfEdges[i].second});
   }
+  vertexX_.resize(vertices_.size());
+  vertexY_.resize(vertices_.size());
+  vertexZ_.resize(vertices_.size());
+  for (std::size_t i = 0; i < vertices_.size(); ++i) {
+    vertexX_[i] = vertices_[i].x();
+    vertexY_[i] = vertices_[i].y();
+    vertexZ_[i] = vertices_[i].z();
+  }
   const std::size_t padded = (edges_.size() + 3) / 4 * 4;
   for (auto* v : {&edgeAx_, &edgeAy_, &edgeAz_}) v->assign(padded, 1e15f);
   for (auto* v : {&edgeDx_, &edgeDy_, &edgeDz_, &edgeInvLen2_}) v->assign(padded, 0.0f);
@@ -195,6 +203,25 @@ void ConvexShape::buildEdges() {
     const float len2 = d.squaredNorm();
     edgeInvLen2_[e] = len2 > 0.0f ? 1.0f / len2 : 0.0f;  // a point edge: its start
   }
+}
+
+void ConvexShape::vertexHeights(const Vec3& direction, float* out) const {
+  // Eigen's 3-vector dot: x + (y + z), each product rounded.
+  const std::size_t n = vertices_.size();
+  assert(vertexX_.size() == n);
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  const __m128 dx = _mm_set1_ps(direction.x()), dy = _mm_set1_ps(direction.y()),
+               dz = _mm_set1_ps(direction.z());
+  for (; i + 4 <= n; i += 4) {
+    const __m128 h = _mm_add_ps(
+        _mm_mul_ps(dx, _mm_loadu_ps(vertexX_.data() + i)),
+        _mm_add_ps(_mm_mul_ps(dy, _mm_loadu_ps(vertexY_.data() + i)),
+                   _mm_mul_ps(dz, _mm_loadu_ps(vertexZ_.data() + i))));
+    _mm_storeu_ps(out + i, h);
+  }
+#endif
+  for (; i < n; ++i) out[i] = direction.dot(vertices_[i]);
 }
 
 float ConvexShape::nearestEdge(const Vec3& p, int* edge, float* t) const {

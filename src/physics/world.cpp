@@ -375,15 +375,20 @@ void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, f
   const Vec3 localNormal = p.q.conjugate() * normal;
   const float originDist = normal.dot(p.p) - offset;
   constexpr float kRoundingSlack = 1e-4f;  // m, far above float rounding at hand scale
-  const auto& vertices = shapes_[static_cast<std::size_t>(c.shape)].vertices();
+  const ConvexShape& shape = shapes_[static_cast<std::size_t>(c.shape)];
+  const auto& vertices = shape.vertices();
+  std::vector<float>& heights = impl_->boundaryHeights;  // localNormal·v per vertex
+  heights.resize(vertices.size());
+  shape.vertexHeights(localNormal, heights.data());
   float reach = margin;  // rows for vertices at most this far from the plane
   if (band < margin) {
     float deepest = std::numeric_limits<float>::infinity();
-    for (const Vec3& v : vertices) deepest = std::min(deepest, localNormal.dot(v));
+    for (const float h : heights) deepest = std::min(deepest, h);
     reach = std::min(margin, deepest + originDist + band);
   }
-  for (const Vec3& v : vertices) {
-    if (localNormal.dot(v) + originDist > reach + kRoundingSlack) continue;
+  for (std::size_t k = 0; k < vertices.size(); ++k) {
+    if (heights[k] + originDist > reach + kRoundingSlack) continue;
+    const Vec3& v = vertices[k];
     const Vec3 world = p.transform(v);
     const float dist = normal.dot(world) - offset;
     if (dist > reach) continue;

@@ -145,6 +145,7 @@ struct World::Impl {
   // Prepared surface rows (parallel to SurfaceRows), packed for the solver.
   std::vector<PreparedSurfaceRow> surfaceRows;
   std::vector<int> surfaceRowsByBody, surfaceBodyStart;  // prepareSurfaceRows' scratch
+  std::vector<float> boundaryHeights;                    // addBoundary's scratch
   SurfaceBatches surfaceBatches;
 
   int slotOf(const WorldState& s, BodyId b) const {

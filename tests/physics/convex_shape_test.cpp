@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -36,6 +37,27 @@ float boxSignedDistance(const Vec3& p, const Vec3& h) {
   const float outside = q.cwiseMax(0.0f).norm();
   const float inside = std::min(q.maxCoeff(), 0.0f);
   return outside + inside;
+}
+
+// vertexHeights (four vertices per SSE instruction) gives each vertex's Vec3::dot bit for bit,
+// also for the vertices past the last full four.
+TEST(ConvexShape, VertexHeightsAreTheDotProducts) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Vec3> points;
+    const int count = 5 + trial;  // hulls of different vertex counts
+    for (int i = 0; i < count; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+    const auto shape = ConvexShape::fromPoints(points);
+    ASSERT_TRUE(shape.ok());
+    const Vec3 direction = Vec3(u(rng), u(rng), u(rng)).normalized();
+    std::vector<float> heights(shape->vertices().size());
+    shape->vertexHeights(direction, heights.data());
+    for (std::size_t i = 0; i < heights.size(); ++i) {
+      const float dot = direction.dot(shape->vertices()[i]);
+      EXPECT_EQ(std::memcmp(&heights[i], &dot, sizeof(float)), 0) << "vertex " << i;
+    }
+  }
 }
 
 TEST(ConvexShape, UnitCubeMassProperties) {

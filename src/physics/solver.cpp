@@ -282,23 +282,18 @@ void World::stepTogether(World& a, World& b, float h) {
   b.beginStep(h);
   Impl& ma = *a.impl_;
   Impl& mb = *b.impl_;
-  for (int it = 0; it < a.settings_.iterations; ++it) {
+  auto sweep = [&](bool useBias) {
     SurfaceBatches::solveTogether(ma.surfaceBatches, ma.solverBodies, mb.surfaceBatches,
-                                  mb.solverBodies, true);
-    solveRowsTogether(ma.solverBodies, ma.rows, mb.solverBodies, mb.rows, true);
+                                  mb.solverBodies, useBias);
+    solveRowsTogether(ma.solverBodies, ma.rows, mb.solverBodies, mb.rows, useBias);
     solvePointBlocksTogether(ma.solverBodies, ma.pointBlocks, mb.solverBodies, mb.pointBlocks,
-                             true);
-  }
+                             useBias);
+  };
+  for (int it = 0; it < a.settings_.iterations; ++it) sweep(true);
   a.integrate(h);
   b.integrate(h);
   projectJointPositionsTogether(ma, mb, a.settings_.positionIterations);
-  for (int it = 0; it < a.settings_.relaxIterations; ++it) {
-    SurfaceBatches::solveTogether(ma.surfaceBatches, ma.solverBodies, mb.surfaceBatches,
-                                  mb.solverBodies, false);
-    solveRowsTogether(ma.solverBodies, ma.rows, mb.solverBodies, mb.rows, false);
-    solvePointBlocksTogether(ma.solverBodies, ma.pointBlocks, mb.solverBodies, mb.pointBlocks,
-                             false);
-  }
+  for (int it = 0; it < a.settings_.relaxIterations; ++it) sweep(false);
   a.endStep();
   b.endStep();
 }

@@ -310,7 +310,8 @@ bool cpuHasAvx() {
 }
 const bool kHasAvx = cpuHasAvx();
 
-// Four bodies of each sweep, as in LaneBodies: lanes 0-3 are sweep a's, 4-7 sweep b's.
+// Four bodies of each sweep (loaded and stored through LaneBodies): lanes 0-3 are sweep a's,
+// 4-7 sweep b's.
 // A field of two batches as one register: a's four lanes low, b's high.
 __attribute__((target("avx"))) inline __m256 load(const float (&fa)[4], const float (&fb)[4]) {
   return _mm256_set_m128(_mm_load_ps(fb), _mm_load_ps(fa));
@@ -321,46 +322,34 @@ struct alignas(32) PairedLaneBodies {
   __m128 invMass[2], pad[2];  // kept only to be written back
 
   __attribute__((target("avx"))) void loadHalf(int half, float* const p[4]) {
-    __m128 x = _mm_loadu_ps(p[0]), y = _mm_loadu_ps(p[1]), z = _mm_loadu_ps(p[2]),
-           m = _mm_loadu_ps(p[3]);
-    _MM_TRANSPOSE4_PS(x, y, z, m);
-    __m128 ax = _mm_loadu_ps(p[0] + 4), ay = _mm_loadu_ps(p[1] + 4), az = _mm_loadu_ps(p[2] + 4),
-           ad = _mm_loadu_ps(p[3] + 4);
-    _MM_TRANSPOSE4_PS(ax, ay, az, ad);
-    invMass[half] = m;
-    pad[half] = ad;
+    LaneBodies four;
+    four.load(p);
+    invMass[half] = four.invMass;
+    pad[half] = four.pad;
     if (half == 0) {
-      vx = _mm256_insertf128_ps(vx, x, 0), vy = _mm256_insertf128_ps(vy, y, 0);
-      vz = _mm256_insertf128_ps(vz, z, 0), wx = _mm256_insertf128_ps(wx, ax, 0);
-      wy = _mm256_insertf128_ps(wy, ay, 0), wz = _mm256_insertf128_ps(wz, az, 0);
+      vx = _mm256_insertf128_ps(vx, four.vx, 0), vy = _mm256_insertf128_ps(vy, four.vy, 0);
+      vz = _mm256_insertf128_ps(vz, four.vz, 0), wx = _mm256_insertf128_ps(wx, four.wx, 0);
+      wy = _mm256_insertf128_ps(wy, four.wy, 0), wz = _mm256_insertf128_ps(wz, four.wz, 0);
     } else {
-      vx = _mm256_insertf128_ps(vx, x, 1), vy = _mm256_insertf128_ps(vy, y, 1);
-      vz = _mm256_insertf128_ps(vz, z, 1), wx = _mm256_insertf128_ps(wx, ax, 1);
-      wy = _mm256_insertf128_ps(wy, ay, 1), wz = _mm256_insertf128_ps(wz, az, 1);
+      vx = _mm256_insertf128_ps(vx, four.vx, 1), vy = _mm256_insertf128_ps(vy, four.vy, 1);
+      vz = _mm256_insertf128_ps(vz, four.vz, 1), wx = _mm256_insertf128_ps(wx, four.wx, 1);
+      wy = _mm256_insertf128_ps(wy, four.wy, 1), wz = _mm256_insertf128_ps(wz, four.wz, 1);
     }
   }
   __attribute__((target("avx"))) void storeHalf(int half, float* const p[4]) const {
-    __m128 x, y, z, ax, ay, az;
+    LaneBodies four;
     if (half == 0) {
-      x = _mm256_castps256_ps128(vx), y = _mm256_castps256_ps128(vy);
-      z = _mm256_castps256_ps128(vz), ax = _mm256_castps256_ps128(wx);
-      ay = _mm256_castps256_ps128(wy), az = _mm256_castps256_ps128(wz);
+      four.vx = _mm256_castps256_ps128(vx), four.vy = _mm256_castps256_ps128(vy);
+      four.vz = _mm256_castps256_ps128(vz), four.wx = _mm256_castps256_ps128(wx);
+      four.wy = _mm256_castps256_ps128(wy), four.wz = _mm256_castps256_ps128(wz);
     } else {
-      x = _mm256_extractf128_ps(vx, 1), y = _mm256_extractf128_ps(vy, 1);
-      z = _mm256_extractf128_ps(vz, 1), ax = _mm256_extractf128_ps(wx, 1);
-      ay = _mm256_extractf128_ps(wy, 1), az = _mm256_extractf128_ps(wz, 1);
+      four.vx = _mm256_extractf128_ps(vx, 1), four.vy = _mm256_extractf128_ps(vy, 1);
+      four.vz = _mm256_extractf128_ps(vz, 1), four.wx = _mm256_extractf128_ps(wx, 1);
+      four.wy = _mm256_extractf128_ps(wy, 1), four.wz = _mm256_extractf128_ps(wz, 1);
     }
-    __m128 m = invMass[half], d = pad[half];
-    _MM_TRANSPOSE4_PS(x, y, z, m);
-    _mm_storeu_ps(p[0], x);
-    _mm_storeu_ps(p[1], y);
-    _mm_storeu_ps(p[2], z);
-    _mm_storeu_ps(p[3], m);
-    _MM_TRANSPOSE4_PS(ax, ay, az, d);
-    _mm_storeu_ps(p[0] + 4, ax);
-    _mm_storeu_ps(p[1] + 4, ay);
-    _mm_storeu_ps(p[2] + 4, az);
-    _mm_storeu_ps(p[3] + 4, d);
+    four.invMass = invMass[half];
+    four.pad = pad[half];
+    four.store(p);
   }
 };
 }  // namespace

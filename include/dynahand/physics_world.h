@@ -273,7 +273,6 @@ class World {
   // slots, rows and warm start; positions integrated (then the joints projected); impulses
   // stored and the state written back. Between them, the sweeps.
   void beginStep(float h);
-  void solveJointAndContactRows(bool useBias);  // one sweep of all but the surface rows
   void integrate(float h);
   void endStep();
   void buildContacts(float dt);  // narrow phase + contact rows (contact_rows.cpp)

@@ -254,16 +254,16 @@ void World::step(float h) {
   assert(h > 0.0f && std::isfinite(h) && "step: dt must be positive");
   const FlushDenormals flushDenormals;
   beginStep(h);
-  for (int it = 0; it < settings_.iterations; ++it) {
-    impl_->surfaceBatches.solve(impl_->solverBodies, true);
-    solveJointAndContactRows(true);
-  }
+  Impl& m = *impl_;
+  auto sweep = [&](bool useBias) {
+    m.surfaceBatches.solve(m.solverBodies, useBias);
+    solveRows(m.solverBodies, m.rows, useBias);
+    solvePointBlocks(m.solverBodies, m.pointBlocks, useBias);
+  };
+  for (int it = 0; it < settings_.iterations; ++it) sweep(true);
   integrate(h);
-  projectJointPositions(*impl_, settings_.positionIterations);
-  for (int it = 0; it < settings_.relaxIterations; ++it) {
-    impl_->surfaceBatches.solve(impl_->solverBodies, false);
-    solveJointAndContactRows(false);
-  }
+  projectJointPositions(m, settings_.positionIterations);
+  for (int it = 0; it < settings_.relaxIterations; ++it) sweep(false);
   endStep();
 }
 
@@ -296,12 +296,6 @@ void World::stepTogether(World& a, World& b, float h) {
   for (int it = 0; it < a.settings_.relaxIterations; ++it) sweep(false);
   a.endStep();
   b.endStep();
-}
-
-void World::solveJointAndContactRows(bool useBias) {
-  Impl& m = *impl_;
-  solveRows(m.solverBodies, m.rows, useBias);
-  solvePointBlocks(m.solverBodies, m.pointBlocks, useBias);
 }
 
 void World::beginStep(float h) {

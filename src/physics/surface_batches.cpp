@@ -1,5 +1,6 @@
 #include "physics/surface_batches.h"
 
+#include "core/cpu_features.h"
 #include "physics/world_impl.h"
 
 #include <algorithm>
@@ -303,20 +304,15 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
 
 #if defined(DYNAHAND_SWEEP_AVX)
 namespace {
-// Static initialisers may run before the library's own CPU detection: run it first.
-bool cpuHasAvx() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx") != 0;
-}
 const bool kHasAvx = cpuHasAvx();
 
-// Four bodies of each sweep (loaded and stored through LaneBodies): lanes 0-3 are sweep a's,
-// 4-7 sweep b's.
 // A field of two batches as one register: a's four lanes low, b's high.
 __attribute__((target("avx"))) inline __m256 load(const float (&fa)[4], const float (&fb)[4]) {
   return _mm256_set_m128(_mm_load_ps(fb), _mm_load_ps(fa));
 }
 
+// Four bodies of each sweep (loaded and stored through LaneBodies): lanes 0-3 are sweep a's,
+// 4-7 sweep b's.
 struct alignas(32) PairedLaneBodies {
   __m256 vx, vy, vz, wx, wy, wz;
   __m128 invMass[2], pad[2];  // kept only to be written back

@@ -1,5 +1,7 @@
 #include "track/posed_bodies.h"
 
+#include "core/cpu_features.h"
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -252,12 +254,6 @@ __attribute__((target("avx"))) int reachablePointsAvx(const float* px, const flo
     count += __builtin_popcount(static_cast<unsigned>(mask));
   }
   return count;
-}
-
-// Static initialisers may run before the library's own CPU detection: run it first.
-bool cpuHasAvx() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx") != 0;
 }
 
 std::atomic<bool> wideScan{cpuHasAvx()};

@@ -65,13 +65,11 @@ class GraspBiasStrategy final : public Strategy {
 }  // namespace
 
 bool runStrategy(Strategy& strategy, StrategyContext& c) {
-  if (!strategy.begin(c)) return false;
-  for (int step = 0;; ++step) {
-    const FrameInput* input = strategy.beforeStep(c, step);
-    if (input == nullptr) return true;
-    c.simulator.prepareStep(c.rig, *input);
-    c.rig.world().step(c.simulator.settings().stepDt);
-  }
+  Strategy* const one[1] = {&strategy};
+  StrategyContext* const context[1] = {&c};
+  bool ran[1] = {false};
+  runStrategiesTwoAtATime(one, context, ran);
+  return ran[0];
 }
 
 void runStrategiesTwoAtATime(std::span<Strategy* const> strategies,

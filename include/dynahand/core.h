@@ -23,15 +23,34 @@ using Mat3 = Eigen::Matrix3f;
 using Quat = Eigen::Quaternionf;
 using Isometry = Eigen::Isometry3f;
 
+// q * v: Eigen's QuaternionBase::_transformVector written out, the same operations in the
+// same order (so the same bits), because GCC keeps Eigen's out of line, a call per rotation
+// in the solver's and the tracker's hot loops.
+inline Vec3 rotateVector(const Quat& q, const Vec3& v) {
+  const float qx = q.x(), qy = q.y(), qz = q.z(), qw = q.w();
+  float ux = qy * v.z() - qz * v.y();  // uv = q.vec() x v
+  float uy = qz * v.x() - qx * v.z();
+  float uz = qx * v.y() - qy * v.x();
+  ux += ux;
+  uy += uy;
+  uz += uz;
+  return Vec3(v.x() + qw * ux + (qy * uz - qz * uy), v.y() + qw * uy + (qz * ux - qx * uz),
+              v.z() + qw * uz + (qx * uy - qy * ux));
+}
+// q.conjugate() * v, likewise.
+inline Vec3 inverseRotateVector(const Quat& q, const Vec3& v) {
+  return rotateVector(q.conjugate(), v);
+}
+
 // A rigid transform: x_world = q * x_local + p. Plain data; q is kept unit length.
 struct Pose {
   Vec3 p = Vec3::Zero();      // position, m
   Quat q = Quat::Identity();  // orientation, unit quaternion
 
   static Pose identity() { return {}; }
-  Vec3 transform(const Vec3& local) const { return q * local + p; }
-  Vec3 rotate(const Vec3& local) const { return q * local; }
-  Vec3 inverseTransform(const Vec3& world) const { return q.conjugate() * (world - p); }
+  Vec3 transform(const Vec3& local) const { return rotateVector(q, local) + p; }
+  Vec3 rotate(const Vec3& local) const { return rotateVector(q, local); }
+  Vec3 inverseTransform(const Vec3& world) const { return inverseRotateVector(q, world - p); }
   Pose inverse() const {
     const Quat qi = q.conjugate();
     return {qi * (-p), qi};

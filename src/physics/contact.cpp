@@ -34,7 +34,7 @@ void ccdSupport(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* out) {
   const Vec3 d(static_cast<float>(dir->v[0]), static_cast<float>(dir->v[1]),
                static_cast<float>(dir->v[2]));
   const float len = d.norm();
-  Vec3 p = o->pose.transform(o->shape->support(o->pose.q.conjugate() * d));
+  Vec3 p = o->pose.transform(o->shape->support(inverseRotateVector(o->pose.q, d)));
   if (len > 0.0f) p += (o->inflate / len) * d;
   for (int k = 0; k < 3; ++k) out->v[k] = static_cast<ccd_real_t>(p[k]);
 }
@@ -46,7 +46,7 @@ void ccdCentre(const void* obj, ccd_vec3_t* out) {
 
 // Index of the face whose world normal maximises dot(normal, dir).
 int mostAlignedFace(const ConvexShape& s, const Quat& q, const Vec3& dir, float* bestDot) {
-  const Vec3 local = q.conjugate() * dir;
+  const Vec3 local = inverseRotateVector(q, dir);
   int best = 0;
   float bestD = -std::numeric_limits<float>::infinity();
   for (std::size_t f = 0; f < s.faces().size(); ++f) {
@@ -63,8 +63,8 @@ int mostAlignedFace(const ConvexShape& s, const Quat& q, const Vec3& dir, float*
 // Separation of the two hulls along the unit world axis (A towards B): > 0 apart, < 0 overlap.
 float separationAlong(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
                       const Pose& poseB, const Vec3& axis) {
-  const Vec3 onA = poseA.transform(a.support(poseA.q.conjugate() * axis));
-  const Vec3 onB = poseB.transform(b.support(poseB.q.conjugate() * -axis));
+  const Vec3 onA = poseA.transform(a.support(inverseRotateVector(poseA.q, axis)));
+  const Vec3 onB = poseB.transform(b.support(inverseRotateVector(poseB.q, -axis)));
   return axis.dot(onB - onA);
 }
 
@@ -82,13 +82,15 @@ bool separatedBeyond(const ConvexShape& a, const Pose& poseA, const ConvexShape&
     axis /= len;
     if (axis.dot(centreLine) < 0.0f) axis = -axis;  // B lies on the positive side
     if (separationAlong(a, poseA, b, poseB, axis) <= margin) return false;
-    if (cachedAxis) *cachedAxis = poseA.q.conjugate() * axis;
+    if (cachedAxis) *cachedAxis = inverseRotateVector(poseA.q, axis);
     return true;
   };
-  if (cachedAxis && separates(poseA.q * *cachedAxis)) return true;
+  if (cachedAxis && separates(rotateVector(poseA.q, *cachedAxis))) return true;
   if (separates(centreLine)) return true;
   for (int k = 0; k < 3; ++k)
-    if (separates(poseA.q * Vec3::Unit(k)) || separates(poseB.q * Vec3::Unit(k))) return true;
+    if (separates(rotateVector(poseA.q, Vec3::Unit(k))) ||
+        separates(rotateVector(poseB.q, Vec3::Unit(k))))
+      return true;
   if (cachedAxis) *cachedAxis = Vec3::Zero();
   return false;
 }
@@ -106,7 +108,7 @@ Vec3 leastPenetrationAxis(const ConvexShape& a, const Pose& poseA, const ConvexS
   auto tryFaces = [&](const ConvexShape& s, const Quat& q, float sign) {
     if (s.faces().size() > kFewFaces) return;
     for (const Face& f : s.faces()) {
-      const Vec3 axis = sign * (q * f.normal);
+      const Vec3 axis = sign * rotateVector(q, f.normal);
       const float sep = separationAlong(a, poseA, b, poseB, axis);
       if (sep > bestSep + 1e-6f) {
         bestSep = sep;

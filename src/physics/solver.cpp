@@ -45,7 +45,7 @@ void setInvInertia(SolverBody& b, const Mat3& inv) {
 // Implicit gyroscopic step in body axes (one Newton iteration, as in Catto, GDC 2015):
 // stable, and it does not add kinetic energy to a spinning asymmetric body.
 Vec3 gyroscopicStep(const Vec3& wWorld, const Quat& q, const Mat3& inertiaLocal, float h) {
-  const Vec3 wb = q.conjugate() * wWorld;
+  const Vec3 wb = inverseRotateVector(q, wWorld);
   const Vec3 iw = inertiaLocal * wb;
   const Vec3 f = h * wb.cross(iw);
   const Mat3 jac = inertiaLocal + h * (skew(wb) * inertiaLocal - skew(iw));
@@ -53,7 +53,7 @@ Vec3 gyroscopicStep(const Vec3& wWorld, const Quat& q, const Mat3& inertiaLocal,
   // Gyroscopic torque does no work: restore the kinetic energy the implicit step bled.
   const float before = wb.dot(iw), after = next.dot(inertiaLocal * next);
   if (after > 0.0f) next *= std::sqrt(before / after);
-  return q * next;
+  return rotateVector(q, next);
 }
 
 inline void applyRowImpulse(std::vector<SolverBody>& sb, const Row& r, float d) {
@@ -99,8 +99,8 @@ inline void solveRow(std::vector<SolverBody>& sb, std::vector<Row>& rows, Row& r
 // after drives, so a drive can never push through a limit). A block (one contact manifold)
 // is iterated blockPasses times in place.
 // The block of rows starting at row i, all its passes; returns the index after it.
-inline std::size_t solveRowBlock(std::vector<SolverBody>& sb, std::vector<Row>& rows,
-                                 std::size_t i, bool useBias) {
+inline std::size_t solveRowBlock(std::vector<SolverBody>& sb, std::vector<Row>& rows, std::size_t i,
+                                 bool useBias) {
   const auto size = static_cast<std::size_t>(rows[i].blockSize);
   const int passes = rows[i].blockPasses;
   for (int pass = 0; pass < passes; ++pass) {
@@ -145,8 +145,7 @@ inline void applyPointImpulse(std::vector<SolverBody>& sb, const World::Impl::Po
   b.w += applyInvInertia(b, p.rB.cross(impulse));
 }
 
-inline void solvePointBlock(std::vector<SolverBody>& sb, World::Impl::PointBlock& p,
-                            bool useBias) {
+inline void solvePointBlock(std::vector<SolverBody>& sb, World::Impl::PointBlock& p, bool useBias) {
   const SolverBody& a = sb[static_cast<std::size_t>(p.slotA)];
   const SolverBody& b = sb[static_cast<std::size_t>(p.slotB)];
   const Vec3 cdot = (b.v + b.w.cross(p.rB)) - (a.v + a.w.cross(p.rA));
@@ -188,8 +187,8 @@ inline void projectJoint(World::Impl& m, std::size_t idx) {
   const auto ia = static_cast<std::size_t>(jp.slotA), ib = static_cast<std::size_t>(jp.slotB);
   const SolverBody& a = m.solverBodies[ia];
   const SolverBody& b = m.solverBodies[ib];
-  const Vec3 rA = m.slotOrientation[ia] * jp.armA;
-  const Vec3 rB = m.slotOrientation[ib] * jp.armB;
+  const Vec3 rA = rotateVector(m.slotOrientation[ia], jp.armA);
+  const Vec3 rB = rotateVector(m.slotOrientation[ib], jp.armB);
   const Vec3 c = (m.slotPosition[ib] + rB) - (m.slotPosition[ia] + rA);
   Mat3 invIA, invIB;
   invIA << a.ixx, a.ixy, a.ixz, a.ixy, a.iyy, a.iyz, a.ixz, a.iyz, a.izz;
@@ -423,7 +422,8 @@ void World::beginStep(float h) {
     const auto ia = static_cast<std::size_t>(c.a), ib = static_cast<std::size_t>(c.b);
     const int sa = slotOf(ia), sb = slotOf(ib);
     if (sa == sb) continue;
-    const Vec3 u = s.orientation[ia] * c.axisA, v = s.orientation[ib] * c.axisB;
+    const Vec3 u = rotateVector(s.orientation[ia], c.axisA),
+               v = rotateVector(s.orientation[ib], c.axisB);
     const float angle = std::acos(std::clamp(u.dot(v), -1.0f, 1.0f));
     const float err = c.maxAngle - angle;  // >= 0 allowed; speculative while inside
     Vec3 axis = u.cross(v);

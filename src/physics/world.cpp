@@ -98,7 +98,7 @@ const ConvexShape& World::bodyShape(BodyId b) const {
 Pose World::pose(BodyId b) const {
   const auto i = static_cast<std::size_t>(b);
   const Quat& q = state_.orientation[i];
-  return {state_.position[i] - q * impl_->bodies[i].centroid, q};
+  return {state_.position[i] - rotateVector(q, impl_->bodies[i].centroid), q};
 }
 Vec3 World::centerOfMass(BodyId b) const {
   return state_.position[static_cast<std::size_t>(b)];
@@ -372,7 +372,7 @@ void World::addBoundary(BodyId b, const Vec3& normal, float offset, float cap, f
   // A first cut in the body frame (the normal turned once, not every vertex moved); the
   // vertices near the margin are then measured as before, so the rows do not change.
   const Pose p = pose(b);
-  const Vec3 localNormal = p.q.conjugate() * normal;
+  const Vec3 localNormal = inverseRotateVector(p.q, normal);
   const float originDist = normal.dot(p.p) - offset;
   constexpr float kRoundingSlack = 1e-4f;  // m, far above float rounding at hand scale
   const ConvexShape& shape = shapes_[static_cast<std::size_t>(c.shape)];

@@ -159,9 +159,9 @@ struct World::Impl {
 
 // A body point given relative to the centre of mass (body axes): its world position, and its
 // arm from the centre of the solver slot moving it (the body's, or its weld group's).
-inline Vec3 armOf(const World::Impl& m, const WorldState& s, std::size_t body,
-                  const Vec3& comLocal, Vec3* world) {
-  *world = s.position[body] + s.orientation[body] * comLocal;
+inline Vec3 armOf(const World::Impl& m, const WorldState& s, std::size_t body, const Vec3& comLocal,
+                  Vec3* world) {
+  *world = s.position[body] + rotateVector(s.orientation[body], comLocal);
   return *world - m.slotPosition[static_cast<std::size_t>(m.slotOf(s, static_cast<BodyId>(body)))];
 }
 

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include "dynahand/core.h"
 
@@ -16,6 +18,29 @@ TEST(Pose, ComposeMatchesSequentialTransform) {
   const Pose b{Vec3(0.01f, 0.02f, 0.03f), Quat(Eigen::AngleAxisf(-0.3f, Vec3::UnitX()))};
   const Vec3 x(0.3f, 0.1f, -0.4f);
   EXPECT_LT(((a * b).transform(x) - a.transform(b.transform(x))).norm(), 1e-6f);
+}
+
+TEST(Pose, RotateVectorIsEigensRotationBitForBit) {
+  // rotateVector is Eigen's q * v written out so that it inlines: the tracker's results
+  // depend on it giving the same bits, for any quaternion and vector.
+  std::uint32_t state = 12345u;
+  auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24) * 2.0f - 1.0f;
+  };
+  for (int i = 0; i < 10000; ++i) {
+    const Quat q = Quat(next(), next(), next(), next()).normalized();
+    const Vec3 v(next(), next(), next() * 0.3f);
+    const Vec3 eigen = q * v, ours = rotateVector(q, v);
+    const Vec3 eigenInverse = q.conjugate() * v, oursInverse = inverseRotateVector(q, v);
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(eigen[k]), std::bit_cast<std::uint32_t>(ours[k]))
+          << "sample " << i << " component " << k;
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(eigenInverse[k]),
+                std::bit_cast<std::uint32_t>(oursInverse[k]))
+          << "sample " << i << " component " << k;
+    }
+  }
 }
 
 TEST(Pose, InverseUndoesTransform) {

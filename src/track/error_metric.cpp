@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace dynahand::track {
@@ -34,7 +36,8 @@ void sumTotals(ErrorBreakdown& out) {
 
 bool computeErrorBounded(const PosedBodies& bodies, std::span<const Vec3> points,
                          const FreeSpaceTest& isFree, float abortAbove, ErrorBreakdown& out,
-                         std::span<const int> nearestHints, std::span<const int> order) {
+                         std::span<const int> nearestHints, std::span<const int> order,
+                         float settleBelowM) {
   const auto n = static_cast<std::size_t>(bodies.size());
   out.fit.assign(n, 0.0f);
   out.occlusion.assign(n, 0.0f);
@@ -53,6 +56,13 @@ bool computeErrorBounded(const PosedBodies& bodies, std::span<const Vec3> points
   std::array<Vec3, kCheckEvery> chunk;
   std::array<int, kCheckEvery> chunkHints, chunkIndex;
   std::array<SurfaceHit, kCheckEvery> hits;
+  // Settling (PosedBodies::nearestManySettling): a point within min(errFit_j so far,
+  // settleBelowM) of its first body, for every body j that could hold it, cannot raise any
+  // errFit: its other bodies are not tested.
+  const bool settling = settleBelowM > 0.0f;
+  std::array<float, 32> settle{};
+  std::array<std::uint8_t, kCheckEvery> settled{};
+  assert(n <= settle.size());
   for (std::size_t j0 = 0; j0 < points.size(); j0 += kCheckEvery) {
     const std::size_t count = std::min(kCheckEvery, points.size() - j0);
     for (std::size_t c = 0; c < count; ++c) {
@@ -61,13 +71,21 @@ bool computeErrorBounded(const PosedBodies& bodies, std::span<const Vec3> points
       chunk[c] = points[k];
       chunkHints[c] = hinted ? nearestHints[k] : -1;
     }
-    bodies.nearestMany(std::span(chunk.data(), count), std::span(chunkHints.data(), count),
-                       std::span(hits.data(), count));
+    if (settling) {
+      for (std::size_t i = 0; i < n; ++i) settle[i] = std::min(out.fit[i], settleBelowM);
+      bodies.nearestManySettling(std::span(chunk.data(), count),
+                                 std::span(chunkHints.data(), count), std::span(settle.data(), n),
+                                 std::span(hits.data(), count), std::span(settled.data(), count));
+    } else {
+      bodies.nearestMany(std::span(chunk.data(), count), std::span(chunkHints.data(), count),
+                         std::span(hits.data(), count));
+    }
     for (std::size_t c = 0; c < count; ++c) {
       const SurfaceHit& hit = hits[c];
       if (hit.body < 0) continue;
       const auto k = static_cast<std::size_t>(chunkIndex[c]);
       out.pointDistance[k] = hit.distance;
+      if (settling && settled[c]) continue;  // its body is unknown; it raises no errFit
       const auto i = static_cast<std::size_t>(hit.body);
       out.fit[i] = std::max(out.fit[i], hit.distance);
       ++out.pointCount[i];

@@ -44,9 +44,16 @@ void computeError(const PosedBodies& bodies, std::span<const Vec3> points,
 // otherwise, with `out.total` a lower bound above abortAbove (the rest of `out` partial).
 // order: optional, the point indices in the order to visit (points likely to be far from
 // the model first make a losing candidate give up sooner); the result does not depend on it.
+// settleBelowM > 0: a point whose distance to its hinted body is at most settleBelowM and at
+// most the errFit so far of every body that could be as near is not matched further (it
+// cannot raise any errFit): errFit, errOcc, the totals and the give-up points are the same
+// bits, but such a point's pointDistance is that hinted distance (an upper bound, at most
+// settleBelowM: any "within settleBelowM" count of pointDistance stays exact) and it is in
+// no pointCount. About half the metric's queries are spared (docs/tracker.md).
 bool computeErrorBounded(const PosedBodies& bodies, std::span<const Vec3> points,
                          const FreeSpaceTest& isFree, float abortAbove, ErrorBreakdown& out,
-                         std::span<const int> nearestHints = {}, std::span<const int> order = {});
+                         std::span<const int> nearestHints = {}, std::span<const int> order = {},
+                         float settleBelowM = 0.0f);
 
 // True when the pixel under `point` shows background farther than it or no data,
 // i.e. the point sits in space the camera saw to be empty. False outside the image.

@@ -7,7 +7,6 @@ namespace dynahand::track {
 
 namespace {
 
-constexpr float kNearSurfaceM = 0.010f;
 constexpr int kTipTolerancePixels = 3;
 
 // Whether pixel (u, v) or a neighbour within the working stride is segmented (the mask

@@ -12,10 +12,16 @@
 
 namespace dynahand::track {
 
+// A sample point within this distance of the model's surface counts as on it
+// (FitQuality::dataNearModel).
+inline constexpr float kNearSurfaceM = 0.010f;
+
 // bodies: the fitted model; pointDistances: each of the hand's sample points' distance to
 // the model's surface (the error metric's ErrorBreakdown::pointDistance at the same pose,
-// so the points are not queried twice); skipBody: a body left out of the model-side share
-// (the forearm, cut by segmentation), -1 for none; tips: the five fingertip keypoints.
+// so the points are not queried twice; only whether each is within kNearSurfaceM matters,
+// so the metric's settled points, measured to at most kNearSurfaceM, count right); skipBody: a body
+// left out of the model-side share (the forearm, cut by segmentation), -1 for none; tips: the five
+// fingertip keypoints.
 FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const float> pointDistances,
                              const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips);
 

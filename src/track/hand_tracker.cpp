@@ -13,10 +13,12 @@ namespace {
 
 constexpr int kMinPoints = 20;  // fewer sample points: no hand in view
 
+// The hand's own world (acquisition steps it); the simulations' copies take the tracking
+// sweeps (HandTracker's constructor).
 physics::WorldSettings worldSettings(const TrackerSettings& s) {
   physics::WorldSettings w;
-  w.iterations = s.iterations;
-  w.relaxIterations = s.relaxIterations;
+  w.iterations = s.acquisitionIterations;
+  w.relaxIterations = s.acquisitionRelaxIterations;
   w.surfaceErp = s.surfaceErp;
   return w;
 }
@@ -73,8 +75,12 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
                                                  makeStrategy(static_cast<StrategyKind>(k)),
                                                  {},
                                                  {},
+                                                 {},
                                                  {}}));
-    lanes_.back()->rig.world().reserveRows(rows);
+    physics::World& world = lanes_.back()->rig.world();
+    world.reserveRows(rows);
+    world.settings().iterations = settings_.iterations;
+    world.settings().relaxIterations = settings_.relaxIterations;
   }
   // Lanes by decreasing run length (ties in lane order), so that paired runs end together.
   for (std::size_t k = 0; k < lanes_.size(); ++k) {
@@ -103,13 +109,57 @@ void HandTracker::reset() {
 }
 
 bool HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
-                           PosedBodies& posed, ErrorBreakdown& error, float abortAbove,
-                           std::span<const int> order) {
+                           std::span<const int> hints, PosedBodies& posed, ErrorBreakdown& error,
+                           float abortAbove, std::span<const int> order) {
   simulator.pose(rig, posed);
   const CloudFrame* cloud = frame.cloud;
   return computeErrorBounded(
       posed, frame.points, [cloud](const Vec3& p) { return cloud != nullptr && cloud->isFree(p); },
-      abortAbove, error, simulator.lastNearestBodies(), order);
+      abortAbove, error, hints, order, kNearSurfaceM);
+}
+
+std::span<const int> HandTracker::metricHints(const Simulator& simulator,
+                                              std::vector<int>& buffer) const {
+  const std::span<const int> last = simulator.lastNearestBodies();
+  if (last.size() != keptIndex_.size() || last.size() == frameStartBodies_.size()) return last;
+  buffer = frameStartBodies_;
+  for (std::size_t k = 0; k < keptIndex_.size(); ++k)
+    buffer[static_cast<std::size_t>(keptIndex_[k])] = last[k];
+  return buffer;
+}
+
+void HandTracker::thinPoints(std::span<const Vec3> points) {
+  const std::span<const int> bodies = simulator_.lastNearestBodies();
+  frameStartBodies_.assign(bodies.begin(), bodies.end());
+  const long cap = settings_.palmPointCap;
+  const std::array<int, 2> thinned = {rig_.anatomy().palm, rig_.anatomy().forearm};
+  std::array<long, 2> count{}, seen{};
+  auto slotOf = [&thinned](int body) {
+    return body == thinned[0] ? 0 : body == thinned[1] ? 1 : -1;
+  };
+  for (const int b : bodies) {
+    const int k = slotOf(b);
+    if (k >= 0) ++count[static_cast<std::size_t>(k)];
+  }
+  keptIndex_.clear();
+  keptPoints_.clear();
+  keptWeights_.clear();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int k = slotOf(bodies[i]);
+    float weight = 1.0f;
+    if (k >= 0 && count[static_cast<std::size_t>(k)] > cap) {
+      // The body's j-th point of c is kept when floor((j + 1) cap / c) steps up: cap of them,
+      // spread evenly, each standing for c / cap.
+      const long c = count[static_cast<std::size_t>(k)];
+      const long j = seen[static_cast<std::size_t>(k)]++;
+      if ((j + 1) * cap / c == j * cap / c) continue;
+      weight = static_cast<float>(c) / static_cast<float>(cap);
+    }
+    keptIndex_.push_back(static_cast<int>(i));
+    keptPoints_.push_back(points[i]);
+    keptWeights_.push_back(weight);
+  }
+  simulator_.keepPoints(keptIndex_, keptPoints_);
 }
 
 void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
@@ -129,7 +179,8 @@ void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
     const std::size_t index = k == 0 ? first : (k <= first ? k - 1 : k);
     Lane& lane = *lanes_[index];
     if (!lane.candidate.ran) continue;
-    if (evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error, best, metricOrder_))
+    if (evaluate(lane.simulator, lane.rig, frame, metricHints(lane.simulator, lane.metricHints),
+                 lane.posed, lane.error, best, metricOrder_))
       best = std::min(best, lane.error.total);
     lane.candidate.error = lane.error.total;
     if (metricOrder_.empty()) {
@@ -149,7 +200,7 @@ void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
 }
 
 float HandTracker::evaluate(Simulator& simulator, const HandFrame& frame) {
-  evaluate(simulator, rig_, frame, posed_, error_);
+  evaluate(simulator, rig_, frame, simulator.lastNearestBodies(), posed_, error_);
   return error_.total;
 }
 
@@ -198,11 +249,20 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
                          frame.planes,
                          {},
                          frame.cloud,
-                         settings_.forearmHoldForce > 0.0f ? &hold : nullptr};
+                         settings_.forearmHoldForce > 0.0f ? &hold : nullptr,
+                         {}};
   // Every simulation's first substep maps the points at the same poses: once, shared.
   simulator_.mapFrameStart(rig_, input);
+  keptIndex_.clear();
+  frameStartBodies_.clear();
+  FrameInput laneInput = input;
+  if (settings_.palmPointCap > 0) {
+    thinPoints(frame.points);
+    laneInput.points = keptPoints_;
+    laneInput.weights = keptWeights_;
+  }
   auto contextOf = [&](Lane& lane) {
-    return StrategyContext{lane.rig,   lane.simulator,        input,           settings_.substeps,
+    return StrategyContext{lane.rig,   lane.simulator,        laneInput,       settings_.substeps,
                            frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};
   };
   auto startLane = [&](Lane& lane) {
@@ -213,7 +273,8 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   };
   auto finishLane = [&](Lane& lane) {
     if (!lane.candidate.ran || !settings_.keepCandidates) return;
-    evaluate(lane.simulator, lane.rig, frame, lane.posed, lane.error);
+    evaluate(lane.simulator, lane.rig, frame, metricHints(lane.simulator, lane.metricHints),
+             lane.posed, lane.error);
     lane.candidate.error = lane.error.total;
     lane.rig.readPose(lane.candidate.pose);
   };
@@ -337,7 +398,7 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   std::vector<LabelledPoint> labels;
   for (const Start& s : starts) {
     rig_.setPose(canonicalPose(frame, s.axis, s.thumb));
-    FrameInput input{frame.points, frame.planes, {}, frame.cloud};
+    FrameInput input{frame.points, frame.planes, {}, frame.cloud, nullptr, {}};
     int steps = settings_.acquisitionSubsteps;
     if (s.labelled) {
       labels.clear();

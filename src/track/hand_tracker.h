@@ -46,7 +46,7 @@ class HandTracker {
   // is sure to exceed abortAbove (see computeErrorBounded; false then). order: the points'
   // visiting order, optional.
   static bool evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
-                       PosedBodies& posed, ErrorBreakdown& error,
+                       std::span<const int> hints, PosedBodies& posed, ErrorBreakdown& error,
                        float abortAbove = std::numeric_limits<float>::infinity(),
                        std::span<const int> order = {});
   float evaluate(Simulator& simulator, const HandFrame& frame);  // of rig_, into error_
@@ -79,7 +79,18 @@ class HandTracker {
     PosedBodies posed;
     ErrorBreakdown error;
     Candidate candidate;
+    std::vector<int> metricHints;  // scratch: its simulator's bodies over all points
   };
+  // A simulator's last nearest bodies over all of the frame's points, for the metric: the
+  // simulations' own where they ran on thinned points (palmPointCap), else the frame start's.
+  std::span<const int> metricHints(const Simulator& simulator, std::vector<int>& buffer) const;
+  // Picks the points the simulations pull on (palmPointCap) and their weights from the
+  // frame-start mapping, and hands them to the simulator sharing it.
+  void thinPoints(std::span<const Vec3> points);
+  std::vector<int> frameStartBodies_;  // (points) nearest body at the frame start
+  std::vector<int> keptIndex_;         // the points kept by thinPoints, increasing
+  std::vector<Vec3> keptPoints_;
+  std::vector<float> keptWeights_;
   std::vector<std::unique_ptr<Lane>> lanes_;
   std::vector<int> pairOrder_;  // lanes by decreasing run length, run two at a time
   // runStrategies' scratch, in pairOrder_ (no allocation per frame).

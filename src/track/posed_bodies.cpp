@@ -146,9 +146,8 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
 // toLocal, eight points at once (one per lane), operation for operation: the same bits.
 __attribute__((target("avx"), always_inline)) inline void toLocal8(const Quat& rotation,
                                                                    const Vec3& t, __m256 px,
-                                                                   __m256 py, __m256 pz,
-                                                                   __m256& qx, __m256& qy,
-                                                                   __m256& qz) {
+                                                                   __m256 py, __m256 pz, __m256& qx,
+                                                                   __m256& qy, __m256& qz) {
   const __m256 w = _mm256_set1_ps(rotation.w());
   const __m256 ux = _mm256_set1_ps(-rotation.x()), uy = _mm256_set1_ps(-rotation.y()),
                uz = _mm256_set1_ps(-rotation.z());
@@ -254,6 +253,30 @@ __attribute__((target("avx"))) int reachablePointsAvx(const float* px, const flo
     count += __builtin_popcount(static_cast<unsigned>(mask));
   }
   return count;
+}
+
+// The error metric's settling (nearestManySettling): clears settled[i] for every point i
+// that body b could still hold at its best distance (its sphere bound does not exceed it,
+// or b is its first body) while that distance is above settle (b's running errFit).
+__attribute__((target("avx"))) void unsettleByBody(const float* px, const float* py,
+                                                   const float* pz, const float* best,
+                                                   const float* first, std::size_t padded, float b,
+                                                   float cx, float cy, float cz, float r,
+                                                   float settle, std::uint8_t* settled) {
+  const __m256 vcx = _mm256_set1_ps(cx), vcy = _mm256_set1_ps(cy), vcz = _mm256_set1_ps(cz);
+  const __m256 vr = _mm256_set1_ps(r), vb = _mm256_set1_ps(b), vs = _mm256_set1_ps(settle);
+  for (std::size_t start = 0; start < padded; start += 8) {
+    const __m256 d = _mm256_loadu_ps(best + start);
+    const __m256 gap = sphereGap8(_mm256_loadu_ps(px + start), _mm256_loadu_ps(py + start),
+                                  _mm256_loadu_ps(pz + start), vcx, vcy, vcz, vr);
+    const __m256 holds =
+        _mm256_or_ps(_mm256_cmp_ps(gap, d, _CMP_LE_OQ),
+                     _mm256_cmp_ps(_mm256_loadu_ps(first + start), vb, _CMP_EQ_OQ));
+    const int mask = _mm256_movemask_ps(_mm256_and_ps(holds, _mm256_cmp_ps(vs, d, _CMP_LT_OQ)));
+    if (mask == 0) continue;
+    for (int k = 0; k < 8; ++k)
+      if (mask >> k & 1) settled[start + static_cast<std::size_t>(k)] = 0;
+  }
 }
 
 std::atomic<bool> wideScan{cpuHasAvx()};
@@ -468,8 +491,23 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
   nearestMany(points, hints, hits, true);
 }
 
+void PosedBodies::nearestManySettling(std::span<const Vec3> points, std::span<const int> hints,
+                                      std::span<const float> settle, std::span<SurfaceHit> hits,
+                                      std::span<std::uint8_t> settled) const {
+  assert(settle.size() == static_cast<std::size_t>(size()) && settled.size() == points.size());
+  std::fill(settled.begin(), settled.end(), std::uint8_t{0});
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+  if (wideScan.load(std::memory_order_relaxed)) {
+    nearestMany(points, hints, hits, true, settle.data(), settled.data());
+    return;
+  }
+#endif
+  nearestMany(points, hints, hits, true);
+}
+
 void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int> hints,
-                              std::span<SurfaceHit> hits, bool exact) const {
+                              std::span<SurfaceHit> hits, bool exact, const float* settle,
+                              std::uint8_t* settled) const {
   assert(hints.size() == points.size() && hits.size() == points.size());
   const std::size_t n = points.size();
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
@@ -564,6 +602,18 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
     tests_[b * padded + static_cast<std::size_t>(testCount_[b]++)] = static_cast<int>(i);
   }
   runTests();
+  if (settle != nullptr) {
+    // Settling (nearestManySettling): a point stays settled unless some body that could hold
+    // it at its first body's distance has a running errFit below that distance. A settled
+    // point is tested against no other body (a best of -infinity reaches no sphere).
+    for (std::size_t i = 0; i < n; ++i) settled[i] = first_[i] >= 0.0f ? 1 : 0;
+    for (std::size_t b = 0; b < bodyCount; ++b)
+      unsettleByBody(px_.data(), py_.data(), pz_.data(), bestDistance_.data(), first_.data(),
+                     padded, static_cast<float>(b), sphereX_[b], sphereY_[b], sphereZ_[b],
+                     sphereR_[b], settle[b], settled);
+    for (std::size_t i = 0; i < n; ++i)
+      if (settled[i]) bestDistance_[i] = -std::numeric_limits<float>::infinity();
+  }
   // Then every other body whose sphere could still beat or tie a point's best (a tie goes to
   // the lower index, as in the one-point queries; testing a body that cannot win changes
   // nothing). The sphere gap is a lower bound on both the planar and the exact distance.
@@ -571,10 +621,10 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
   // compressed by a table, written whole, the count advanced by the mask's bits.
   const int lastLanes = (1 << (n - (padded - 8))) - 1;  // the real points of the last eight
   for (std::size_t b = 0; b < bodyCount; ++b) {
-    testCount_[b] = reachablePointsAvx(px_.data(), py_.data(), pz_.data(), bestDistance_.data(),
-                                       first_.data(), padded, lastLanes, static_cast<float>(b),
-                                       sphereX_[b], sphereY_[b], sphereZ_[b], sphereR_[b],
-                                       tests_.data() + b * padded);
+    testCount_[b] =
+        reachablePointsAvx(px_.data(), py_.data(), pz_.data(), bestDistance_.data(), first_.data(),
+                           padded, lastLanes, static_cast<float>(b), sphereX_[b], sphereY_[b],
+                           sphereZ_[b], sphereR_[b], tests_.data() + b * padded);
   }
   runTests();
 #endif

@@ -68,6 +68,16 @@ class PosedBodies {
   // (the error metric's bulk path).
   void nearestMany(std::span<const Vec3> points, std::span<const int> hints,
                    std::span<SurfaceHit> hits) const;
+  // nearestMany for the error metric, which only needs each body's largest distance: a
+  // point whose distance d to its first body (its hint, else the nearest sphere) is at most
+  // settle[j] for that body and every body j whose bounding sphere comes within d is
+  // "settled": it is tested against no other body, hits[i] is the first body's exact hit (d
+  // is an upper bound on its nearest distance) and settled[i] = 1. With settle[j] at most
+  // body j's errFit so far, such a point cannot raise any errFit. Other points get nearest()'s
+  // answer and settled[i] = 0. Without AVX nothing settles.
+  void nearestManySettling(std::span<const Vec3> points, std::span<const int> hints,
+                           std::span<const float> settle, std::span<SurfaceHit> hits,
+                           std::span<std::uint8_t> settled) const;
 
   // The face-plane scans (and the exact query's bounding-sphere bounds) run eight at a time
   // with AVX when the CPU has it (on by default there), else four per SSE instruction or
@@ -109,7 +119,8 @@ class PosedBodies {
   std::array<float, kMaxBodies> sphereX_{}, sphereY_{}, sphereZ_{}, sphereR_{};
 
   void nearestMany(std::span<const Vec3> points, std::span<const int> hints,
-                   std::span<SurfaceHit> hits, bool exact) const;
+                   std::span<SurfaceHit> hits, bool exact, const float* settle = nullptr,
+                   std::uint8_t* settled = nullptr) const;
   // The bulk queries' scratch: the points as SoA, each point's first body (as a float, for
   // eight-wide compares; -1 for none), per body the points to test (a row of tests_ each) and
   // their count, each point's best so far.

@@ -1,6 +1,7 @@
 #include "track/simulation.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 #include "track/silhouette.h"
@@ -92,6 +93,18 @@ void Simulator::mapFrameStart(const HandRig& rig, const FrameInput& input) {
   }
 }
 
+void Simulator::keepPoints(std::span<const int> kept, std::span<const Vec3> keptPoints) {
+  assert(kept.size() == keptPoints.size() && kept.size() <= frameStart_.size());
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const auto i = static_cast<std::size_t>(kept[k]);  // i >= k: gathered in place
+    frameStart_[k] = frameStart_[i];
+    hints_[k] = hints_[i];
+  }
+  frameStart_.resize(kept.size());
+  hints_.resize(kept.size());
+  frameStartPoints_ = keptPoints.data();
+}
+
 Simulator::Attachment Simulator::map(const HandRig& rig, const Vec3& p, BodyMask mask,
                                      bool anyDistance, int* hint) const {
   const SurfaceHit hit = bodies_.nearestPlanar(p, mask, hint ? *hint : -1);
@@ -145,9 +158,15 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
   const auto first = static_cast<std::size_t>(subset);
   const std::size_t used =
       input.points.size() > first ? (input.points.size() - first - 1) / stride + 1 : 0;
-  const std::size_t total = used + input.labelled.size();
-  if (total == 0) return;
-  const float cap = settings_.pullForce * settings_.stepDt / static_cast<float>(total);
+  float total = static_cast<float>(used + input.labelled.size());
+  const bool weighted = input.weights.size() == input.points.size() && !input.weights.empty();
+  if (weighted) {
+    total = static_cast<float>(input.labelled.size());
+    for (std::size_t i = first; i < input.points.size(); i += stride) total += input.weights[i];
+  }
+  if (!(total > 0.0f)) return;
+  const float cap = settings_.pullForce * settings_.stepDt / total;
+  auto capOf = [&](std::size_t i) { return weighted ? cap * input.weights[i] : cap; };
 
   auto attach = [&](const Attachment& a, const Vec3& p, float rowCap) {
     if (a.body < 0) return;
@@ -171,12 +190,12 @@ void Simulator::addRows(HandRig& rig, const FrameInput& input) {
                  start.frameStartPoses_.end(), samePose);
   if (sameAsFrameStart) {
     for (std::size_t i = first; i < input.points.size(); i += stride)
-      attach(start.frameStart_[i], input.points[i], cap);
+      attach(start.frameStart_[i], input.points[i], capOf(i));
   } else {
     const bool keep = shared_ == nullptr && frameStart_.empty() && frameStartPoints_ == nullptr;
     mapPoints(rig, input, subset);
     for (std::size_t i = first; i < input.points.size(); i += stride)
-      attach(attachments_[i], input.points[i], cap);
+      attach(attachments_[i], input.points[i], capOf(i));
     if (keep) {
       frameStart_ = attachments_;
       frameStartSubset_ = subset;

@@ -62,6 +62,9 @@ struct FrameInput {
   std::span<const LabelledPoint> labelled;
   const CloudFrame* cloud = nullptr;  // for free-space queries
   const AxisHold* hold = nullptr;     // optional
+  // Per point, its share of the pull relative to the others (empty: 1 each), e.g. a point
+  // standing for several thinned ones.
+  std::span<const float> weights;
 };
 
 class Simulator {
@@ -77,6 +80,10 @@ class Simulator {
   // Computes and keeps the mapping of the frame's points at the rig's current poses, for
   // the simulators that share it.
   void mapFrameStart(const HandRig& rig, const FrameInput& input);
+  // After mapFrameStart: the simulations sharing the mapping run on the points `kept` only
+  // (increasing indices into mapFrameStart's points; keptPoints: those points, contiguous,
+  // valid for the frame). The mapping and hints are gathered to them.
+  void keepPoints(std::span<const int> kept, std::span<const Vec3> keptPoints);
   // Runs `substeps` physics steps of the rig on the frame's data: each is prepareStep, then
   // the world's step.
   void run(HandRig& rig, const FrameInput& input, int substeps);
@@ -127,7 +134,7 @@ class Simulator {
   std::vector<int> pointCells_;  // (points) each point's cell this frame, -1: none
   int labelRows_ = 0;
   float labelScale_ = 0.0f;  // grid cells per pixel
-  int pass_ = 0;                       // substeps since beginFrame: picks the point subset
+  int pass_ = 0;             // substeps since beginFrame: picks the point subset
 };
 
 }  // namespace dynahand::track

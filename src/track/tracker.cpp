@@ -65,8 +65,11 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
   }
   if (settings.hands != 1 && settings.hands != 2) return Error{"hands must be 1 or 2"};
   if (settings.threads < 1 || settings.threads > 64) return Error{"threads must be 1..64"};
-  if (settings.substeps < 1 || settings.iterations < 1)
-    return Error{"substeps and iterations must be >= 1"};
+  if (settings.substeps < 1 || settings.iterations < 1 || settings.acquisitionIterations < 1)
+    return Error{"substeps, iterations and acquisitionIterations must be >= 1"};
+  if (settings.relaxIterations < 0 || settings.acquisitionRelaxIterations < 0)
+    return Error{"relaxIterations and acquisitionRelaxIterations must be >= 0"};
+  if (settings.palmPointCap < 0) return Error{"palmPointCap must be >= 0 (0: all points)"};
   if (settings.pointSubsets < 1 || settings.pointSubsets > 16)
     return Error{"pointSubsets must be 1..16"};
   // A negative band leaves no vertex near enough: the boundary planes would silently go.

@@ -162,6 +162,50 @@ TEST(ErrorMetric, BoundedVersionIsExactUnderTheBoundAndALowerBoundAbove) {
   }
 }
 
+// Settling (computeErrorBounded's settleBelowM) spares the queries of points that cannot
+// raise any errFit: the errors and the give-up point are the same bits, and a settled
+// point's distance is an upper bound no larger than settleBelowM.
+TEST(ErrorMetric, SettlingGivesTheSameErrorsAndUpperBoundsBelowItsLimit) {
+  constexpr float kSettleBelow = 0.05f;  // the random points lie up to a few cm off
+  const bool wide = PosedBodies::useWidePlaneScan(true);
+  std::size_t settledTotal = 0;  // points in no pointCount
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    Scene s = randomScene(seed);
+    PosedBodies bodies;
+    bodies.set(s.shapePtrs, s.poses);
+    const FreeSpaceTest isFree = [&](const Vec3& c) {
+      return inFreeSpace(c, s.depth, s.intrinsics);
+    };
+    ErrorBreakdown full, settled;
+    computeError(bodies, s.points, isFree, full);
+    ASSERT_TRUE(computeErrorBounded(bodies, s.points, isFree,
+                                    std::numeric_limits<float>::infinity(), settled, {}, {},
+                                    kSettleBelow));
+    EXPECT_EQ(settled.total, full.total) << "seed " << seed;
+    EXPECT_EQ(settled.fit, full.fit) << "seed " << seed;
+    EXPECT_EQ(settled.occlusion, full.occlusion) << "seed " << seed;
+    int counted = 0;
+    for (const int c : settled.pointCount) counted += c;
+    settledTotal += s.points.size() - static_cast<std::size_t>(counted);
+    for (std::size_t k = 0; k < s.points.size(); ++k) {
+      EXPECT_GE(settled.pointDistance[k], full.pointDistance[k]) << "seed " << seed << " " << k;
+      if (settled.pointDistance[k] != full.pointDistance[k]) {
+        EXPECT_LE(settled.pointDistance[k], kSettleBelow) << "seed " << seed << " " << k;
+      }
+    }
+    // Giving up: at the same point, with the same lower bound.
+    ErrorBreakdown stopped, stoppedSettled;
+    EXPECT_FALSE(computeErrorBounded(bodies, s.points, isFree, 0.5f * full.total, stopped));
+    EXPECT_FALSE(computeErrorBounded(bodies, s.points, isFree, 0.5f * full.total, stoppedSettled,
+                                     {}, {}, kSettleBelow));
+    EXPECT_EQ(stoppedSettled.total, stopped.total) << "seed " << seed;
+  }
+  // Only the eight-wide path settles.
+  if (wide) {
+    EXPECT_GT(settledTotal, 300u);
+  }
+}
+
 TEST(ErrorMetric, PerfectFitHasNoFitError) {
   // Points sampled on the visible surface of one box give errFit = 0 for it.
   std::vector<physics::ConvexShape> shapes{physics::ConvexShape::box(Vec3(0.02f, 0.02f, 0.02f))};

@@ -64,9 +64,10 @@ struct SegmentationConfig {
   float borderPreferenceDepthM = 0.1f;
   // 2: at working stride 1, regions grow on every other sample (while those are at most one
   // voxel apart) and the samples between join the region they sit in when on its surface;
-  // a quarter of the growing cost (docs/performance.md), edges at the working resolution.
-  // 1: every working sample (the default: the tracker tests are tuned on it).
-  int growStep = 1;
+  // a quarter of the growing cost (docs/performance.md), edges at the working resolution,
+  // 4 % of the tracker's time at 320x240 and as accurate (docs/tracker.md, session 12).
+  // 1: every working sample.
+  int growStep = 2;
   // Two-hand use: also take the next nearest region when its nearest point is within
   // this depth (m) behind the first one's. 0 = one region only.
   float secondRegionDepthBandM = 0.0f;

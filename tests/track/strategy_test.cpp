@@ -74,11 +74,12 @@ TEST(Strategies, GrossMotionRecoversAFastJumpThatNormalAloneLoses) {
   EXPECT_LT(gross, 0.010f);
 }
 
-// The tracker starts with the index finger curled while the data shows it straight.
-float wronglyBentIndex(const TrackerSettings& settings, int frames) {
+// The tracker starts with the index finger curled while the data shows it straight, the hand
+// `distance` in front of the camera.
+float wronglyBentIndex(const TrackerSettings& settings, int frames, float distance) {
   const auto hand = model::makeDefaultHand();
   test::SyntheticCamera camera("tof");
-  const Pose root = test::facingCamera(hand, Vec3(0.0f, 0.0f, 0.40f));
+  const Pose root = test::facingCamera(hand, Vec3(0.0f, 0.0f, distance));
   const model::ModelPose truth = posed(hand, openAngles(hand), root);
   model::JointAngles bent = openAngles(hand);
   // Curled fully into the palm (the joints' limits): its bones then lie on the palm's samples.
@@ -96,13 +97,25 @@ float wronglyBentIndex(const TrackerSettings& settings, int frames) {
   return tipError;
 }
 
+// Whether the plain fit frees the curled finger is chaotic: it does when a straight finger's
+// sample happens to catch the right bone, which any change of rounding or segmentation edge
+// can decide (normal only: 3 or 100 mm). So three placements: finger flip fixes the finger
+// in every one, the plain fit loses it in most.
 TEST(Strategies, FingerFlipFixesAWronglyBentFingerWithinOneSecond) {
-  const float normal = wronglyBentIndex(only({StrategyKind::Normal}), 30);
-  const float flip = wronglyBentIndex(only({StrategyKind::Normal, StrategyKind::FingerFlip}), 30);
-  std::printf("index tip error after 1 s: normal only %.1f mm, with finger flip %.1f mm\n",
-              1000.0 * static_cast<double>(normal), 1000.0 * static_cast<double>(flip));
-  EXPECT_GT(normal, 0.03f);
-  EXPECT_LT(flip, 0.010f);
+  int normalLost = 0;
+  for (const float distance : {0.35f, 0.40f, 0.45f}) {
+    const float normal = wronglyBentIndex(only({StrategyKind::Normal}), 30, distance);
+    const float flip =
+        wronglyBentIndex(only({StrategyKind::Normal, StrategyKind::FingerFlip}), 30, distance);
+    std::printf(
+        "hand at %.2f m, index tip error after 1 s: normal only %.1f mm, with finger "
+        "flip %.1f mm\n",
+        static_cast<double>(distance), 1000.0 * static_cast<double>(normal),
+        1000.0 * static_cast<double>(flip));
+    if (normal > 0.03f) ++normalLost;
+    EXPECT_LT(flip, 0.010f) << "hand at " << distance << " m";
+  }
+  EXPECT_GE(normalLost, 2) << "the case must be one the plain fit does not solve";
 }
 
 // A grasp seen from the thumb side: the ring and little fingers are hidden behind the index

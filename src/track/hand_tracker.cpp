@@ -261,6 +261,9 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     laneInput.points = keptPoints_;
     laneInput.weights = keptWeights_;
   }
+  // The strategies that only change joints or welds before their first step (all but the
+  // detector's) share that step's rows too.
+  simulator_.prepareFrameStartRows(rig_, laneInput);
   auto contextOf = [&](Lane& lane) {
     return StrategyContext{lane.rig,   lane.simulator,        laneInput,       settings_.substeps,
                            frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};

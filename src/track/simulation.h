@@ -84,6 +84,11 @@ class Simulator {
   // (increasing indices into mapFrameStart's points; keptPoints: those points, contiguous,
   // valid for the frame). The mapping and hints are gathered to them.
   void keepPoints(std::span<const int> kept, std::span<const Vec3> keptPoints);
+  // After mapFrameStart (and keepPoints): the rows of a first physics step on `input` at the
+  // rig's current state, kept for the simulations sharing the mapping. A simulation's first
+  // step on the same input object from the same body positions and orientations copies them
+  // instead of building its own (most strategies change only joints or welds before it).
+  void prepareFrameStartRows(HandRig& rig, const FrameInput& input);
   // Runs `substeps` physics steps of the rig on the frame's data: each is prepareStep, then
   // the world's step.
   void run(HandRig& rig, const FrameInput& input, int substeps);
@@ -126,6 +131,12 @@ class Simulator {
   std::vector<Pose> frameStartPoses_;
   const Vec3* frameStartPoints_ = nullptr;
   const Simulator* shared_ = nullptr;  // whose frame-start mapping to use (see beginFrame)
+  // prepareFrameStartRows' rows, the input they are for (nullptr: none this frame) and the
+  // body positions and orientations they were built at.
+  physics::SurfaceRows frameStartRows_;
+  const FrameInput* frameStartRowsInput_ = nullptr;
+  std::vector<Vec3> frameStartRowsPositions_;
+  std::vector<Quat> frameStartRowsOrientations_;
   // The frame-start mapping's nearest bodies on a coarse pixel grid (kLabelColumns across the
   // image, -1: none), the next frame's first guesses (mapFrameStart).
   static constexpr int kLabelColumns = 80;

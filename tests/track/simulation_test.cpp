@@ -21,7 +21,7 @@ struct HandAtRest {
 
 // The open hand 40 cm away and sample points on and around its bodies (the rig's keypoints
 // and points a little off them).
-HandAtRest makeSetup() {
+HandAtRest makeHandAtRest() {
   const model::ArticulatedModel hand = model::makeDefaultHand();
   auto rig = HandRig::create(hand, physics::WorldSettings{}, RigSettings{}, 1.0f / 60);
   EXPECT_TRUE(rig.ok()) << rig.message();
@@ -47,7 +47,7 @@ SimulationSettings everyPoint() {
 }
 
 TEST(Simulator, WeightedPointsShareThePullInProportion) {
-  HandAtRest s = makeSetup();
+  HandAtRest s = makeHandAtRest();
   const SimulationSettings settings = everyPoint();
   std::vector<float> weights;
   for (std::size_t i = 0; i < s.points.size(); ++i)
@@ -95,8 +95,8 @@ std::vector<float> rowsOfTwoSteps(HandAtRest& s, const Simulator& shared, const 
 TEST(Simulator, KeptPointsMapAsIfTheyWereTheFramesOnly) {
   // Every third point kept: the simulations then pull exactly as if the frame had held only
   // those points (a point's mapping does not depend on the others).
-  HandAtRest a = makeSetup();
-  HandAtRest b = makeSetup();
+  HandAtRest a = makeHandAtRest();
+  HandAtRest b = makeHandAtRest();
   std::vector<int> kept;
   std::vector<Vec3> keptPoints;
   for (std::size_t i = 0; i < a.points.size(); i += 3) {
@@ -114,6 +114,51 @@ TEST(Simulator, KeptPointsMapAsIfTheyWereTheFramesOnly) {
   const std::vector<float> direct = rowsOfTwoSteps(b, only, keptInput);
   ASSERT_FALSE(direct.empty());
   EXPECT_EQ(thinned, direct);
+}
+
+
+// Rows of one first step of a simulation sharing `shared`'s mapping, as numbers.
+std::vector<float> firstStepRows(HandAtRest& s, const Simulator& shared, const FrameInput& input) {
+  Simulator lane(SimulationSettings{});
+  lane.beginFrame(&shared);
+  lane.prepareStep(s.rig, input);
+  const physics::SurfaceRows& rows = s.rig.world().rows();
+  std::vector<float> out;
+  for (std::size_t i = 0; i < rows.body.size(); ++i) {
+    out.push_back(static_cast<float>(rows.body[i]));
+    for (int k = 0; k < 3; ++k) {
+      out.push_back(rows.anchor[i][k]);
+      out.push_back(rows.normal[i][k]);
+      out.push_back(rows.target[i][k]);
+    }
+    out.push_back(rows.lower[i]);
+    out.push_back(rows.upper[i]);
+  }
+  return out;
+}
+
+TEST(Simulator, FirstStepRowsSharedOnlyFromTheSameState) {
+  HandAtRest a = makeHandAtRest();
+  const FrameInput input{a.points, {}, {}, nullptr, nullptr, {}};
+  Simulator built(SimulationSettings{}), prepared(SimulationSettings{});
+  built.mapFrameStart(a.rig, input);
+  prepared.mapFrameStart(a.rig, input);
+  prepared.prepareFrameStartRows(a.rig, input);
+  const std::vector<float> own = firstStepRows(a, built, input);
+  ASSERT_FALSE(own.empty());
+  EXPECT_EQ(firstStepRows(a, prepared, input), own);
+  // Another input object, or the bodies moved: the simulation builds its own rows.
+  const FrameInput fewer{std::span(a.points).first(a.points.size() / 2), {}, {}, nullptr,
+                         nullptr, {}};
+  EXPECT_EQ(firstStepRows(a, prepared, fewer), firstStepRows(a, built, fewer));
+  EXPECT_NE(firstStepRows(a, prepared, fewer), own);
+  model::ModelPose moved;
+  a.rig.readPose(moved);
+  for (Pose& body : moved.bodies) body.p.x() += 0.003f;
+  a.rig.setPose(moved);
+  const std::vector<float> movedRows = firstStepRows(a, built, input);
+  EXPECT_NE(movedRows, own);
+  EXPECT_EQ(firstStepRows(a, prepared, input), movedRows);
 }
 
 }  // namespace

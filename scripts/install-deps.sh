@@ -9,6 +9,7 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-videoio-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang-format                    # scripts/test.sh checks the sources' formatting
   libopenni2-dev libfreenect-dev
   libwebsocketpp-dev libasio-dev  # dynahand serve: WebSocket + HTTP server
   chromium                        # the viewer's browser test (driven by playwright-core)

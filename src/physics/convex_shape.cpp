@@ -214,10 +214,9 @@ void ConvexShape::vertexHeights(const Vec3& direction, float* out) const {
   const __m128 dx = _mm_set1_ps(direction.x()), dy = _mm_set1_ps(direction.y()),
                dz = _mm_set1_ps(direction.z());
   for (; i + 4 <= n; i += 4) {
-    const __m128 h = _mm_add_ps(
-        _mm_mul_ps(dx, _mm_loadu_ps(vertexX_.data() + i)),
-        _mm_add_ps(_mm_mul_ps(dy, _mm_loadu_ps(vertexY_.data() + i)),
-                   _mm_mul_ps(dz, _mm_loadu_ps(vertexZ_.data() + i))));
+    const __m128 h = _mm_add_ps(_mm_mul_ps(dx, _mm_loadu_ps(vertexX_.data() + i)),
+                                _mm_add_ps(_mm_mul_ps(dy, _mm_loadu_ps(vertexY_.data() + i)),
+                                           _mm_mul_ps(dz, _mm_loadu_ps(vertexZ_.data() + i))));
     _mm_storeu_ps(out + i, h);
   }
 #endif

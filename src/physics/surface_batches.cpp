@@ -408,16 +408,16 @@ __attribute__((target("avx"))) void SurfaceBatches::solveTogether(SurfaceBatches
     // solve()'s arithmetic, lane for lane.
     const __m256 effMass = load(ba.effMass, bb.effMass);
     const __m256 old = load(ba.impulse, bb.impulse);
-    const __m256 base = _mm256_sub_ps(
-        old, _mm256_mul_ps(effMass, useBias ? load(ba.bias, bb.bias)
-                                            : load(ba.relaxBias, bb.relaxBias)));
-    const __m256 jv = _mm256_add_ps(
-        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(load(ba.nx, bb.nx), lane.vx),
-                                    _mm256_mul_ps(load(ba.ny, bb.ny), lane.vy)),
-                      _mm256_mul_ps(load(ba.nz, bb.nz), lane.vz)),
-        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(load(ba.ax, bb.ax), lane.wx),
-                                    _mm256_mul_ps(load(ba.ay, bb.ay), lane.wy)),
-                      _mm256_mul_ps(load(ba.az, bb.az), lane.wz)));
+    const __m256 base =
+        _mm256_sub_ps(old, _mm256_mul_ps(effMass, useBias ? load(ba.bias, bb.bias)
+                                                          : load(ba.relaxBias, bb.relaxBias)));
+    const __m256 jv =
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(load(ba.nx, bb.nx), lane.vx),
+                                                  _mm256_mul_ps(load(ba.ny, bb.ny), lane.vy)),
+                                    _mm256_mul_ps(load(ba.nz, bb.nz), lane.vz)),
+                      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(load(ba.ax, bb.ax), lane.wx),
+                                                  _mm256_mul_ps(load(ba.ay, bb.ay), lane.wy)),
+                                    _mm256_mul_ps(load(ba.az, bb.az), lane.wz)));
     const __m256 clamped = _mm256_min_ps(
         _mm256_max_ps(_mm256_sub_ps(base, _mm256_mul_ps(effMass, jv)), load(ba.lower, bb.lower)),
         load(ba.upper, bb.upper));

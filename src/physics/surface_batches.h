@@ -37,8 +37,8 @@ class SurfaceBatches {
   // a.solve(bodiesA, useBias) and b.solve(bodiesB, useBias) (of two different worlds) side by
   // side, a's four lanes and b's four in one eight-wide AVX register: each lane does exactly
   // what solve() does, so the same bits, but the two sweeps' latency chains overlap.
-  static void solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA,
-                            SurfaceBatches& b, std::vector<SolverBody>& bodiesB, bool useBias);
+  static void solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA, SurfaceBatches& b,
+                            std::vector<SolverBody>& bodiesB, bool useBias);
   // Whether solveTogether runs side by side here (the CPU has AVX); otherwise it solves one
   // after the other.
   static bool canSolveTogether();
@@ -66,8 +66,8 @@ class SurfaceBatches {
   std::vector<int> order_, count_, start_, slotsByCount_;
   std::vector<int> virtualSlot_;  // (rows) the slot or copy a row is solved on
   std::vector<Split> splits_;
-  std::vector<int> splitOfSlot_;  // (slots) index into splits_, -1 when not split
-  std::vector<int> rowsSeen_;     // (slots) scratch while dealing rows to copies
+  std::vector<int> splitOfSlot_;   // (slots) index into splits_, -1 when not split
+  std::vector<int> rowsSeen_;      // (slots) scratch while dealing rows to copies
   std::vector<float> slotCopies_;  // (slots) copies a slot is split into (1: not split)
   std::vector<SolverBody> copies_;
   int slotCount_ = 0;  // real solver slots; copies are numbered after them

@@ -15,8 +15,8 @@ namespace dynahand::physics {
 namespace {
 
 // One surface row, prepared for the batches (the scalar reference of prepareSurfaceRows).
-void prepareSurfaceRow(World::Impl& m, const WorldState& s, const SurfaceRows& rows,
-                       std::size_t i, float erp, float invH) {
+void prepareSurfaceRow(World::Impl& m, const WorldState& s, const SurfaceRows& rows, std::size_t i,
+                       float erp, float invH) {
   const auto body = static_cast<std::size_t>(rows.body[i]);
   assert(body < m.bodies.size() && "surface row: bad body");
   const int slot = m.slotOf(s, static_cast<BodyId>(body));
@@ -28,10 +28,10 @@ void prepareSurfaceRow(World::Impl& m, const WorldState& s, const SurfaceRows& r
   const Vec3 invIAng = applyInvInertia(b, ang);
   const float k = b.invMass * nrm.squaredNorm() + ang.dot(invIAng);
   const float c = nrm.dot(world - rows.target[i]);
-  const Bias bias =
-      rows.lower[i] >= 0.0f ? oneSidedBias(c, erp, invH) : twoSidedBias(c, erp, invH);
-  m.surfaceRows[i] = {slot,       nrm,        ang,           invIAng,      k > 0.0f ? 1.0f / k : 0.0f,
-                      bias.solve, bias.relax, rows.lower[i], rows.upper[i]};
+  const Bias bias = rows.lower[i] >= 0.0f ? oneSidedBias(c, erp, invH) : twoSidedBias(c, erp, invH);
+  m.surfaceRows[i] = {
+      slot,       nrm,        ang,           invIAng,      k > 0.0f ? 1.0f / k : 0.0f,
+      bias.solve, bias.relax, rows.lower[i], rows.upper[i]};
 }
 
 #if defined(__SSE__)
@@ -79,8 +79,10 @@ struct SurfaceRowsOfBody {
     gather(rows.anchor, ax, ay, az);
     gather(rows.normal, nx, ny, nz);
     gather(rows.target, tx, ty, tz);
-    const __m128 lower = _mm_setr_ps(rows.lower[i0], rows.lower[i1], rows.lower[i2], rows.lower[i3]);
-    const __m128 upper = _mm_setr_ps(rows.upper[i0], rows.upper[i1], rows.upper[i2], rows.upper[i3]);
+    const __m128 lower =
+        _mm_setr_ps(rows.lower[i0], rows.lower[i1], rows.lower[i2], rows.lower[i3]);
+    const __m128 upper =
+        _mm_setr_ps(rows.upper[i0], rows.upper[i1], rows.upper[i2], rows.upper[i3]);
     // comLocal = anchor - centroid; world = position + q * comLocal (Eigen's
     // _transformVector: uv = q.vec × v, uv += uv, v + w uv + q.vec × uv).
     const __m128 lx = sub(ax, cx), ly = sub(ay, cy), lz = sub(az, cz);
@@ -107,15 +109,15 @@ struct SurfaceRowsOfBody {
     const __m128 c = add(mul(nx, sub(wx, tx)), add(mul(ny, sub(wy, ty)), mul(nz, sub(wz, tz))));
     // Bias (rows.h): one-sided rows (lower >= 0) ahead of the surface keep c / h in both
     // sweeps; otherwise erp c / h, and no relax bias.
-    const __m128 ahead = _mm_and_ps(_mm_cmpge_ps(lower, _mm_setzero_ps()),
-                                    _mm_cmpgt_ps(c, _mm_setzero_ps()));
+    const __m128 ahead =
+        _mm_and_ps(_mm_cmpge_ps(lower, _mm_setzero_ps()), _mm_cmpgt_ps(c, _mm_setzero_ps()));
     const __m128 speculative = mul(c, _mm_set1_ps(invH));
     const __m128 closing = mul(mul(_mm_set1_ps(erp), c), _mm_set1_ps(invH));
-    const __m128 solve =
-        _mm_or_ps(_mm_and_ps(ahead, speculative), _mm_andnot_ps(ahead, closing));
+    const __m128 solve = _mm_or_ps(_mm_and_ps(ahead, speculative), _mm_andnot_ps(ahead, closing));
     const __m128 relax = _mm_and_ps(ahead, speculative);
     alignas(16) float out[14][4];
-    const __m128 fields[14] = {nx, ny, nz, gx, gy, gz, jx, jy, jz, effMass, solve, relax, lower, upper};
+    const __m128 fields[14] = {nx, ny, nz,      gx,    gy,    gz,    jx,
+                               jy, jz, effMass, solve, relax, lower, upper};
     for (int f = 0; f < 14; ++f) _mm_store_ps(out[f], fields[f]);
     for (int lane = 0; lane < 4; ++lane) {
       PreparedSurfaceRow& row = m.surfaceRows[static_cast<std::size_t>(index[lane])];

@@ -164,10 +164,10 @@ SceneSpec readScene(const Json& root) {
   if (s.friction < 0.0f) throw FormatError{"friction", "must be >= 0"};
   if (const Json* v = optional(root, "hand")) {
     objectAt(*v, "hand");
-    checkKeys(*v, "hand",
-              {"palmMaxForce", "palmMaxTorque", "palmTimeConstant", "palmMaxSpeed",
-               "fingerMaxTorque", "thumbMaxTorque", "jointTimeConstant", "jointSpringAngle",
-               "jointDampingRatio"});
+    checkKeys(
+        *v, "hand",
+        {"palmMaxForce", "palmMaxTorque", "palmTimeConstant", "palmMaxSpeed", "fingerMaxTorque",
+         "thumbMaxTorque", "jointTimeConstant", "jointSpringAngle", "jointDampingRatio"});
     HandDriveSettings& h = s.hand;
     readNumber(*v, "hand", "palmMaxForce", h.palmMaxForce, true);
     readNumber(*v, "hand", "palmMaxTorque", h.palmMaxTorque, true);

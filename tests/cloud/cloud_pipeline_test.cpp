@@ -132,8 +132,8 @@ TEST(CloudPipeline, AHandInPiecesIsTakenBeforeALargerSurfaceBehindIt) {
   std::vector<Sphere> spheres;
   cloud::scenes::addCapsule(spheres, Vec3(0.0f, 0.02f, 0.68f), Vec3(0.0f, 0.2f, 0.7f), 0.05f,
                             0.01f);  // the forearm, across the image's lower half
-  const std::vector<Vec3> pieces = {
-      Vec3(-0.05f, -0.02f, 0.50f), Vec3(0.0f, -0.03f, 0.51f), Vec3(0.05f, -0.02f, 0.52f)};
+  const std::vector<Vec3> pieces = {Vec3(-0.05f, -0.02f, 0.50f), Vec3(0.0f, -0.03f, 0.51f),
+                                    Vec3(0.05f, -0.02f, 0.52f)};
   for (const Vec3& c : pieces) spheres.push_back({c, 0.02f});  // about 12 cm^2 each
   const DepthFrame frame = cloud::scenes::render(k, spheres, 0.0f);
   CloudPipeline pipeline(k);

@@ -281,8 +281,7 @@ TEST(Determinism, TwoWorldsSteppedTogetherGiveTheSameBytesAsAlone) {
   auto fill = [](World& w, int step, int which) {
     w.rows().clear();
     const int count = which == 0 ? 300 + 7 * step : 120 + 3 * step;
-    scenes::addRandomSurfaceRows(w, count, static_cast<std::uint64_t>(1000 * which + step),
-                                 0.01f);
+    scenes::addRandomSurfaceRows(w, count, static_cast<std::uint64_t>(1000 * which + step), 0.01f);
     for (int b = 0; b < w.bodyCount(); ++b)
       w.addBoundary(b, Vec3(0.0f, -1.0f, 0.0f), -w.pose(1).p.y() - 0.01f, 0.01f, 0.03f);
     if (which == 1 && step == 10) w.weld(std::vector<BodyId>{0, 1, 2, 3, 4, 5, 6, 7, 8});

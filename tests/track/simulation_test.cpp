@@ -116,7 +116,6 @@ TEST(Simulator, KeptPointsMapAsIfTheyWereTheFramesOnly) {
   EXPECT_EQ(thinned, direct);
 }
 
-
 // Rows of one first step of a simulation sharing `shared`'s mapping, as numbers.
 std::vector<float> firstStepRows(HandAtRest& s, const Simulator& shared, const FrameInput& input) {
   Simulator lane(SimulationSettings{});
@@ -148,8 +147,8 @@ TEST(Simulator, FirstStepRowsSharedOnlyFromTheSameState) {
   ASSERT_FALSE(own.empty());
   EXPECT_EQ(firstStepRows(a, prepared, input), own);
   // Another input object, or the bodies moved: the simulation builds its own rows.
-  const FrameInput fewer{std::span(a.points).first(a.points.size() / 2), {}, {}, nullptr,
-                         nullptr, {}};
+  const FrameInput fewer{
+      std::span(a.points).first(a.points.size() / 2), {}, {}, nullptr, nullptr, {}};
   EXPECT_EQ(firstStepRows(a, prepared, fewer), firstStepRows(a, built, fewer));
   EXPECT_NE(firstStepRows(a, prepared, fewer), own);
   model::ModelPose moved;

@@ -68,9 +68,9 @@ TEST(Tracker, FollowsSlowOpenClose) {
 }
 
 // Same input, same output bits: twice on one thread (the simulations two by two, their worlds
-// stepped together), and with the simulations spread over three threads (each alone); with every simulation's pose and full error kept, and without (then losing
-// simulations stop their metric early, in the same order for any thread count). The winner
-// is the same either way.
+// stepped together), and with the simulations spread over three threads (each alone); with every
+// simulation's pose and full error kept, and without (then losing simulations stop their metric
+// early, in the same order for any thread count). The winner is the same either way.
 TEST(Tracker, IsDeterministicForAnyThreadCount) {
   synth::SynthOptions o;
   o.clip = "wave";

@@ -69,25 +69,30 @@ TEST(Simulator, WeightedPointsShareThePullInProportion) {
   EXPECT_FLOAT_EQ(rows.upper[0], settings.pullForce * settings.stepDt * weights[0] / weightSum);
 }
 
-// Rows of a simulation sharing a frame-start mapping, step by step (positions, caps).
-std::vector<float> rowsOfTwoSteps(HandAtRest& s, const Simulator& shared, const FrameInput& input) {
+// The world's rows as numbers (bodies, anchors, normals, targets, bounds), appended to out.
+void appendRows(const physics::SurfaceRows& rows, std::vector<float>& out) {
+  for (std::size_t i = 0; i < rows.body.size(); ++i) {
+    out.push_back(static_cast<float>(rows.body[i]));
+    for (int k = 0; k < 3; ++k) {
+      out.push_back(rows.anchor[i][k]);
+      out.push_back(rows.normal[i][k]);
+      out.push_back(rows.target[i][k]);
+    }
+    out.push_back(rows.lower[i]);
+    out.push_back(rows.upper[i]);
+  }
+}
+
+// Rows of `steps` physics steps of a simulation sharing `shared`'s frame-start mapping.
+std::vector<float> rowsOfSteps(HandAtRest& s, const Simulator& shared, const FrameInput& input,
+                               int steps) {
   Simulator lane(SimulationSettings{});
   lane.beginFrame(&shared);
   std::vector<float> out;
-  for (int step = 0; step < 2; ++step) {
+  for (int step = 0; step < steps; ++step) {
     lane.prepareStep(s.rig, input);
-    const physics::SurfaceRows& rows = s.rig.world().rows();
-    for (std::size_t i = 0; i < rows.body.size(); ++i) {
-      out.push_back(static_cast<float>(rows.body[i]));
-      for (int k = 0; k < 3; ++k) {
-        out.push_back(rows.anchor[i][k]);
-        out.push_back(rows.normal[i][k]);
-        out.push_back(rows.target[i][k]);
-      }
-      out.push_back(rows.lower[i]);
-      out.push_back(rows.upper[i]);
-    }
-    s.rig.world().step(1.0f / 60);
+    appendRows(s.rig.world().rows(), out);
+    if (step + 1 < steps) s.rig.world().step(1.0f / 60);
   }
   return out;
 }
@@ -107,33 +112,18 @@ TEST(Simulator, KeptPointsMapAsIfTheyWereTheFramesOnly) {
   all.mapFrameStart(a.rig, FrameInput{a.points, {}, {}, nullptr, nullptr, {}});
   all.keepPoints(kept, keptPoints);
   const FrameInput keptInput{keptPoints, {}, {}, nullptr, nullptr, {}};
-  const std::vector<float> thinned = rowsOfTwoSteps(a, all, keptInput);
+  const std::vector<float> thinned = rowsOfSteps(a, all, keptInput, 2);
 
   Simulator only(SimulationSettings{});
   only.mapFrameStart(b.rig, keptInput);
-  const std::vector<float> direct = rowsOfTwoSteps(b, only, keptInput);
+  const std::vector<float> direct = rowsOfSteps(b, only, keptInput, 2);
   ASSERT_FALSE(direct.empty());
   EXPECT_EQ(thinned, direct);
 }
 
 // Rows of one first step of a simulation sharing `shared`'s mapping, as numbers.
 std::vector<float> firstStepRows(HandAtRest& s, const Simulator& shared, const FrameInput& input) {
-  Simulator lane(SimulationSettings{});
-  lane.beginFrame(&shared);
-  lane.prepareStep(s.rig, input);
-  const physics::SurfaceRows& rows = s.rig.world().rows();
-  std::vector<float> out;
-  for (std::size_t i = 0; i < rows.body.size(); ++i) {
-    out.push_back(static_cast<float>(rows.body[i]));
-    for (int k = 0; k < 3; ++k) {
-      out.push_back(rows.anchor[i][k]);
-      out.push_back(rows.normal[i][k]);
-      out.push_back(rows.target[i][k]);
-    }
-    out.push_back(rows.lower[i]);
-    out.push_back(rows.upper[i]);
-  }
-  return out;
+  return rowsOfSteps(s, shared, input, 1);
 }
 
 TEST(Simulator, FirstStepRowsSharedOnlyFromTheSameState) {

@@ -15,6 +15,8 @@
 //                       world.step(dt);
 #pragma once
 
+#include <cassert>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -110,15 +112,36 @@ struct SurfaceRows {
   void reserve(int rows);
   // Two-sided pull of a body point towards a target along normal; |impulse| <= cap.
   void addSurface(BodyId b, const Vec3& anchorLocal, const Vec3& normalWorld,
-                  const Vec3& targetWorld, float cap);
+                  const Vec3& targetWorld, float cap) {
+    add(b, anchorLocal, normalWorld, targetWorld, -cap, cap);
+  }
   // Line of sight: the body point must stay at or beyond the target along the unit camera ray
   // direction rayDir (free space in front of an observed depth point); push-only, <= cap.
   void addLineOfSight(BodyId b, const Vec3& anchorLocal, const Vec3& rayDir,
-                      const Vec3& targetWorld, float cap);
+                      const Vec3& targetWorld, float cap) {
+    add(b, anchorLocal, rayDir, targetWorld, 0.0f, cap);
+  }
   // Half-space: the body point must stay on the side of the target plane that the unit
   // normal points to (normal·(p - target) >= 0); push-only, <= cap.
   void addHalfSpace(BodyId b, const Vec3& anchorLocal, const Vec3& normalWorld,
-                    const Vec3& targetWorld, float cap);
+                    const Vec3& targetWorld, float cap) {
+    add(b, anchorLocal, normalWorld, targetWorld, 0.0f, cap);
+  }
+
+ private:
+  // Inline: the tracker adds a thousand rows per physics step.
+  void add(BodyId b, const Vec3& anchorLocal, const Vec3& normalWorld, const Vec3& targetWorld,
+           float low, float high) {
+    assert(high >= 0.0f && anchorLocal.allFinite() && targetWorld.allFinite());
+    assert(std::abs(normalWorld.squaredNorm() - 1.0f) < 1e-3f && "row normal must be unit");
+    body.push_back(b);
+    anchor.push_back(anchorLocal);
+    normal.push_back(normalWorld);
+    target.push_back(targetWorld);
+    lower.push_back(low);
+    upper.push_back(high);
+    impulse.push_back(0.0f);
+  }
 };
 
 // Every mutable quantity of a world: poses, velocities, weld groups, warm-start impulses and

@@ -464,36 +464,4 @@ void SurfaceRows::reserve(int rows) {
   impulse.reserve(n);
 }
 
-void SurfaceRows::addSurface(BodyId b, const Vec3& anchorLocal, const Vec3& normalWorld,
-                             const Vec3& targetWorld, float cap) {
-  assert(cap >= 0.0f && anchorLocal.allFinite() && targetWorld.allFinite());
-  assert(std::abs(normalWorld.squaredNorm() - 1.0f) < 1e-3f && "surface row: normal must be unit");
-  body.push_back(b);
-  anchor.push_back(anchorLocal);
-  normal.push_back(normalWorld);
-  target.push_back(targetWorld);
-  lower.push_back(-cap);
-  upper.push_back(cap);
-  impulse.push_back(0.0f);
-}
-
-void SurfaceRows::addLineOfSight(BodyId b, const Vec3& anchorLocal, const Vec3& rayDir,
-                                 const Vec3& targetWorld, float cap) {
-  addHalfSpace(b, anchorLocal, rayDir, targetWorld, cap);
-}
-
-void SurfaceRows::addHalfSpace(BodyId b, const Vec3& anchorLocal, const Vec3& normalWorld,
-                               const Vec3& targetWorld, float cap) {
-  assert(cap >= 0.0f && anchorLocal.allFinite() && targetWorld.allFinite());
-  assert(std::abs(normalWorld.squaredNorm() - 1.0f) < 1e-3f &&
-         "half-space row: normal must be unit");
-  body.push_back(b);
-  anchor.push_back(anchorLocal);
-  normal.push_back(normalWorld);
-  target.push_back(targetWorld);
-  lower.push_back(0.0f);
-  upper.push_back(cap);
-  impulse.push_back(0.0f);
-}
-
 }  // namespace dynahand::physics

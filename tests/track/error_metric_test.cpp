@@ -54,6 +54,11 @@ struct Scene {
   std::vector<Vec3> points;
   DepthFrame depth{64, 48, 0.001f};
   Intrinsics intrinsics{64, 48, 60.0f, 60.0f, 31.5f, 23.5f};
+
+  // The metric's free-space test over this scene's depth image (valid while the scene is).
+  FreeSpaceTest freeSpace() const {
+    return [this](const Vec3& c) { return inFreeSpace(c, depth, intrinsics); };
+  }
 };
 
 Scene randomScene(unsigned seed) {
@@ -90,9 +95,7 @@ TEST(ErrorMetric, MatchesBruteForceOnRandomPoses) {
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
     ErrorBreakdown err;
-    computeError(
-        bodies, s.points, [&](const Vec3& c) { return inFreeSpace(c, s.depth, s.intrinsics); },
-        err);
+    computeError(bodies, s.points, s.freeSpace(), err);
 
     std::vector<float> fit(s.shapes.size(), 0.0f);
     for (std::size_t k = 0; k < s.points.size(); ++k) {
@@ -133,9 +136,7 @@ TEST(ErrorMetric, BoundedVersionIsExactUnderTheBoundAndALowerBoundAbove) {
     Scene s = randomScene(seed);
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
-    const FreeSpaceTest isFree = [&](const Vec3& c) {
-      return inFreeSpace(c, s.depth, s.intrinsics);
-    };
+    const FreeSpaceTest isFree = s.freeSpace();
     ErrorBreakdown full;
     computeError(bodies, s.points, isFree, full);
     std::vector<int> reversed(s.points.size());
@@ -173,9 +174,7 @@ TEST(ErrorMetric, SettlingGivesTheSameErrorsAndUpperBoundsBelowItsLimit) {
     Scene s = randomScene(seed);
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
-    const FreeSpaceTest isFree = [&](const Vec3& c) {
-      return inFreeSpace(c, s.depth, s.intrinsics);
-    };
+    const FreeSpaceTest isFree = s.freeSpace();
     ErrorBreakdown full, settled;
     computeError(bodies, s.points, isFree, full);
     ASSERT_TRUE(computeErrorBounded(bodies, s.points, isFree,

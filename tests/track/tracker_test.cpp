@@ -161,6 +161,22 @@ TEST(Tracker, RejectsBadSettings) {
   TrackerSettings noSubsets;
   noSubsets.pointSubsets = 0;  // every step would pull on no point
   EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, noSubsets).ok());
+  TrackerSettings noAcquisitionSweeps;
+  noAcquisitionSweeps.acquisitionIterations = 0;
+  EXPECT_FALSE(
+      Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, noAcquisitionSweeps).ok());
+  TrackerSettings negativeRelax;
+  negativeRelax.relaxIterations = -1;
+  EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, negativeRelax).ok());
+  TrackerSettings negativeAcquisitionRelax;
+  negativeAcquisitionRelax.acquisitionRelaxIterations = -1;
+  EXPECT_FALSE(
+      Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, negativeAcquisitionRelax)
+          .ok());
+  TrackerSettings negativePalmCap;
+  negativePalmCap.palmPointCap = -1;  // 0 means every point; below it nothing is meant
+  EXPECT_FALSE(
+      Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, negativePalmCap).ok());
   for (const float band : {-0.001f, std::numeric_limits<float>::quiet_NaN()}) {
     TrackerSettings badBand;
     badBand.boundaryBand = band;  // no boundary row would be made

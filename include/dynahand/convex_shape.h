@@ -3,7 +3,6 @@
 // bodies. Units: metres, kilograms, body frame throughout.
 #pragma once
 
-#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -11,8 +10,6 @@
 #include "dynahand/core.h"
 
 namespace dynahand::physics {
-
-class FaceCells;
 
 // One polygonal hull face. Coplanar triangles are merged into one face.
 struct Face {
@@ -62,9 +59,6 @@ class ConvexShape {
   // Ray origin + t·dir (dir unit or not, t in units of |dir|): the smallest t in [0, maxT] at
   // which the ray is inside or on the solid; 0 if the origin is inside; nullopt on a miss.
   std::optional<float> raycast(const Vec3& origin, const Vec3& dir, float maxT) const;
-  // Per cell of a grid around the hull, the faces that can hold a point's largest face-plane
-  // distance (physics/face_cells.h): built on first use (thread-safe), shared by copies.
-  const FaceCells& faceCells() const;
 
  private:
   ConvexShape() = default;
@@ -94,8 +88,6 @@ class ConvexShape {
   Mat3 unitInertia_ = Mat3::Zero();  // inertia about the centroid per kg, m^2
   float inscribedRadius_ = 0.0f;
   float boundingRadius_ = 0.0f;
-  struct FaceCellsSlot;
-  std::shared_ptr<FaceCellsSlot> faceCells_;
 };
 
 }  // namespace dynahand::physics

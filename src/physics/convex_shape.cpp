@@ -2,8 +2,6 @@
 // decomposition, exact queries over the merged polygonal faces.
 #include "dynahand/convex_shape.h"
 
-#include "physics/face_cells.h"
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -11,7 +9,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
-#include <mutex>
 #include <string>
 #include <utility>
 
@@ -299,19 +296,7 @@ float ConvexShape::nearestEdge(const Vec3& p, int* edge, float* t) const {
   return result;
 }
 
-struct ConvexShape::FaceCellsSlot {
-  std::once_flag built;
-  std::unique_ptr<const FaceCells> cells;
-};
-
-const FaceCells& ConvexShape::faceCells() const {
-  std::call_once(faceCells_->built,
-                 [this] { faceCells_->cells = std::make_unique<const FaceCells>(*this); });
-  return *faceCells_->cells;
-}
-
 void ConvexShape::computeDerived() {
-  faceCells_ = std::make_shared<FaceCellsSlot>();
   buildEdges();
   // Fan-triangulate every face and form tetrahedra with a reference point near the centre;
   // accumulate volume, first moment and the second-moment (covariance) tensor in double.

@@ -66,9 +66,6 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
   // Room for every row a frame can make: points + labels + boundary rows.
   const int rows = settings_.cloud.maxVoxels + 64 + 17 * settings_.cloud.planes.planeCount;
   rig_.world().reserveRows(rows);
-  // The shapes' face cells (the nearest-body scans' candidate faces) are built now, once for
-  // the rig and the lanes' copies of it, rather than in the first frame.
-  for (int b = 0; b < rig_.world().bodyCount(); ++b) rig_.world().bodyShape(b).faceCells();
   // One lane per strategy, each with its own copy of the rig, so the simulations can run
   // on any thread and give the same result on all of them.
   for (int k = 0; k < kStrategyCount; ++k) {

@@ -1,7 +1,6 @@
 #include "track/posed_bodies.h"
 
 #include "core/cpu_features.h"
-#include "physics/face_cells.h"
 
 #include <algorithm>
 #include <array>
@@ -22,8 +21,6 @@
 namespace dynahand::track {
 
 namespace {
-
-constexpr int kMaxCandidateWords = 4;  // shapes of up to 256 faces scan their FaceCells
 
 // The largest of the eight lanes' maxima; ties go to the lower face index.
 float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
@@ -171,104 +168,17 @@ __attribute__((target("avx"), always_inline)) inline void toLocal8(const Quat& r
                      _mm256_sub_ps(_mm256_mul_ps(ux, cy), _mm256_mul_ps(uy, cx)));
 }
 
-// Face indices as floats, for the candidate scan's index register.
-struct FaceIndexTable {
-  float index[kMaxCandidateWords * 64]{};
-  constexpr FaceIndexTable() {
-    for (int f = 0; f < kMaxCandidateWords * 64; ++f) index[f] = static_cast<float>(f);
-  }
-};
-constexpr FaceIndexTable kFaceIndex;
-
-// The union of the eight lanes' candidate faces (physics::FaceCells) into `visit`; false
-// when some lane is outside the grid (any face can then hold its largest distance). The
-// cells are found eight at a time, by FaceCells::candidates' arithmetic.
-__attribute__((target("avx"), always_inline)) inline bool candidateUnion(
-    const physics::FaceCells& cells, __m256 qx, __m256 qy, __m256 qz, std::uint64_t* visit) {
-  const physics::FaceCells::Grid& g = cells.grid();
-  const __m256 inverse = _mm256_set1_ps(g.inverseCell), zero = _mm256_setzero_ps();
-  const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(qx, _mm256_set1_ps(g.loX)), inverse);
-  const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(qy, _mm256_set1_ps(g.loY)), inverse);
-  const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(qz, _mm256_set1_ps(g.loZ)), inverse);
-  const __m256 cellsX = _mm256_set1_ps(g.cellsX), cellsY = _mm256_set1_ps(g.cellsY);
-  const __m256 inside = _mm256_and_ps(
-      _mm256_and_ps(
-          _mm256_and_ps(_mm256_cmp_ps(fx, zero, _CMP_GE_OQ), _mm256_cmp_ps(fx, cellsX, _CMP_LT_OQ)),
-          _mm256_and_ps(_mm256_cmp_ps(fy, zero, _CMP_GE_OQ),
-                        _mm256_cmp_ps(fy, cellsY, _CMP_LT_OQ))),
-      _mm256_and_ps(_mm256_cmp_ps(fz, zero, _CMP_GE_OQ),
-                    _mm256_cmp_ps(fz, _mm256_set1_ps(g.cellsZ), _CMP_LT_OQ)));
-  if (_mm256_movemask_ps(inside) != 0xFF) return false;
-  const __m256 cell = _mm256_add_ps(
-      _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_floor_ps(fz), cellsY), _mm256_floor_ps(fy)),
-                    cellsX),
-      _mm256_floor_ps(fx));
-  alignas(32) std::int32_t index[8];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(index), _mm256_cvttps_epi32(cell));
-  const int words = cells.words();
-  for (int w = 0; w < words; ++w) visit[w] = 0;
-  for (int k = 0; k < 8; ++k) {
-    const std::uint64_t* mask = cells.mask(static_cast<std::size_t>(index[k]));
-    for (int w = 0; w < words; ++w) visit[w] |= mask[w];
-  }
-  return true;
-}
-
-// scanEightAvx's loop over every face: each lane's largest distance and first face so far
-// (best, index) updated plane by plane. Once every lane has a plane beyond its stop (its
-// largest so far is), none of them can win: it gives up (the caller sees a distance above
-// the stop, as with maxPlaneDistance's early return).
-__attribute__((target("avx"), always_inline)) inline void scanEveryFace(
-    std::size_t count, const float* nx, const float* ny, const float* nz, const float* o, __m256 qx,
-    __m256 qy, __m256 qz, __m256 stopAbove, __m256& best, __m256& index) {
-  __m256 plane = _mm256_setzero_ps();
-  const __m256 one = _mm256_set1_ps(1.0f);
-  for (std::size_t f = 0; f < count; ++f) {
-    const __m256 d =
-        planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
-                       _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
-    keepLargest(d, plane, best, index);
-    plane = _mm256_add_ps(plane, one);
-    if ((f & 7) == 7 && _mm256_movemask_ps(_mm256_cmp_ps(best, stopAbove, _CMP_GT_OQ)) == 0xFF)
-      break;
-  }
-}
-
-// The same over the faces set in `visit` only, in index order: every face that can hold a
-// lane's largest distance is there (FaceCells), so the maxima, first faces and bits are the
-// full scan's.
-__attribute__((target("avx"), always_inline)) inline void scanListedFaces(
-    const std::uint64_t* visit, int words, const float* nx, const float* ny, const float* nz,
-    const float* o, __m256 qx, __m256 qy, __m256 qz, __m256 stopAbove, __m256& best,
-    __m256& index) {
-  int seen = 0;
-  for (int w = 0; w < words; ++w) {
-    for (std::uint64_t bits = visit[w]; bits != 0; bits &= bits - 1) {
-      const auto f = static_cast<std::size_t>(w * 64 + __builtin_ctzll(bits));
-      const __m256 d =
-          planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
-                         _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
-      keepLargest(d, _mm256_broadcast_ss(kFaceIndex.index + f), best, index);
-      if ((++seen & 7) == 0 &&
-          _mm256_movemask_ps(_mm256_cmp_ps(best, stopAbove, _CMP_GT_OQ)) == 0xFF)
-        return;
-    }
-  }
-}
-
 // Eight points at once (one per lane), for one body: the points in the body frame (toLocal's
 // arithmetic), each one's largest plane distance and its face, lowest index on ties
 // (maxPlaneDistance's answer: the first plane holding a lane's maximum). Stops early once
 // every lane has seen a plane farther than its `stop`; such a lane then only has a distance
 // above its stop, not the largest.
-// Where the body's FaceCells hold all eight lanes, only their cells' faces are scanned.
 __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec3& t,
                                                  const float* wx, const float* wy, const float* wz,
                                                  const float* nx, const float* ny, const float* nz,
                                                  const float* o, std::size_t count,
-                                                 const physics::FaceCells* cells, const float* stop,
-                                                 float* lx, float* ly, float* lz, float* largest,
-                                                 std::int32_t* face) {
+                                                 const float* stop, float* lx, float* ly, float* lz,
+                                                 float* largest, std::int32_t* face) {
   __m256 qx, qy, qz;
   toLocal8(rotation, t, _mm256_load_ps(wx), _mm256_load_ps(wy), _mm256_load_ps(wz), qx, qy, qz);
   _mm256_store_ps(lx, qx);
@@ -276,12 +186,21 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
   _mm256_store_ps(lz, qz);
   __m256 best = _mm256_set1_ps(-1e30f);
   __m256 index = _mm256_setzero_ps();
+  __m256 plane = _mm256_setzero_ps();
+  const __m256 one = _mm256_set1_ps(1.0f);
   const __m256 stopAbove = _mm256_load_ps(stop);
-  std::uint64_t visit[kMaxCandidateWords];
-  if (cells != nullptr && candidateUnion(*cells, qx, qy, qz, visit))
-    scanListedFaces(visit, cells->words(), nx, ny, nz, o, qx, qy, qz, stopAbove, best, index);
-  else
-    scanEveryFace(count, nx, ny, nz, o, qx, qy, qz, stopAbove, best, index);
+  for (std::size_t f = 0; f < count; ++f) {
+    const __m256 d =
+        planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
+                       _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
+    keepLargest(d, plane, best, index);
+    plane = _mm256_add_ps(plane, one);
+    // Once every lane has a plane beyond its stop (its largest so far is), none of them can
+    // win: give up (the caller sees a distance above the stop, as with maxPlaneDistance's
+    // early return).
+    if ((f & 7) == 7 && _mm256_movemask_ps(_mm256_cmp_ps(best, stopAbove, _CMP_GT_OQ)) == 0xFF)
+      break;
+  }
   // The lane's maximum is its face's distance by the scalar formula's arithmetic (same
   // operations in the same order), so callers need not recompute it.
   _mm256_store_ps(largest, best);
@@ -387,10 +306,6 @@ void PosedBodies::set(std::span<const physics::ConvexShape* const> shapes,
         t.nz[f] = faces[f].normal.z();
         t.offset[f] = faces[f].offset;
       }
-#if defined(DYNAHAND_PLANE_SCAN_AVX)
-      const physics::FaceCells& cells = shapes_[i]->faceCells();
-      t.cells = cells.words() <= kMaxCandidateWords ? &cells : nullptr;
-#endif
     }
   }
   for (std::size_t i = 0; i < kMaxBodies; ++i) {  // far spheres pad past the last body
@@ -649,8 +564,7 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
           stop[k] = bestDistance_[i];
         }
         scanEightAvx(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
-                     table.nz.data(), table.offset.data(), planes, table.cells, stop, lx, ly, lz,
-                     largest, face);
+                     table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, largest, face);
         for (std::size_t k = 0; k < lanes; ++k) {
           // Farther than the best (outside, the exact distance is at least the plane's).
           const float sd = largest[k];

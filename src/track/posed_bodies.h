@@ -89,8 +89,6 @@ class PosedBodies {
   // Face planes of one shape as SoA, padded to a multiple of 8 with planes that never win.
   struct PlaneTable {
     std::vector<float> nx, ny, nz, offset;
-    // The shape's candidate faces per cell for the eight-wide scans (null: scan every face).
-    const physics::FaceCells* cells = nullptr;
   };
   // Largest plane distance of local point q and its face; returns early with some
   // distance > stopAbove (not the largest) once one plane is farther than that.

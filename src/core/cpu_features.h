@@ -15,4 +15,14 @@ inline bool cpuHasAvx() {
 #endif
 }
 
+// Whether the CPU has AVX-512F and AVX-512VL (mask registers on 256-bit vectors).
+inline bool cpuHasAvx512vl() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx512f") != 0 && __builtin_cpu_supports("avx512vl") != 0;
+#else
+  return false;
+#endif
+}
+
 }  // namespace dynahand

@@ -84,6 +84,9 @@ class PosedBodies {
   // scalar; both give identical bits. false forces the narrow path (for tests comparing the
   // two); returns whether the wide path is now in use.
   static bool useWidePlaneScan(bool enabled);
+  // The bulk queries' wide scan uses AVX-512's mask registers where the CPU has AVX-512VL
+  // (on by default there; same bits); false forces the AVX one. Returns whether it is in use.
+  static bool useMaskedPlaneScan(bool enabled);
 
  private:
   // Face planes of one shape as SoA, padded to a multiple of 8 with planes that never win.

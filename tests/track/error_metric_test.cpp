@@ -305,7 +305,10 @@ TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
     Scene s = randomScene(seed);
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
-    for (const bool wide : {true, false}) {
+    // Wide with AVX-512 masks (where the CPU has them), wide with AVX, narrow.
+    for (const int path : {0, 1, 2}) {
+      const bool wide = path < 2;
+      PosedBodies::useMaskedPlaneScan(path == 0);
       PosedBodies::useWidePlaneScan(wide);
       std::vector<int> hints(s.points.size());
       for (std::size_t i = 0; i < hints.size(); ++i)
@@ -329,6 +332,7 @@ TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
     }
   }
   PosedBodies::useWidePlaneScan(true);
+  PosedBodies::useMaskedPlaneScan(true);
 }
 
 // The bulk queries at their edges: no points, no bodies, out-of-range hints, two identical
@@ -336,8 +340,9 @@ TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
 // crash, no hit on a real distance).
 TEST(PosedBodies, ManyPointsQueriesHandleEmptyInputTiesAndBadPoints) {
   Scene s = randomScene(3);
-  for (const bool wide : {true, false}) {
-    PosedBodies::useWidePlaneScan(wide);
+  for (const int path : {0, 1, 2}) {  // AVX-512 masks, AVX, narrow
+    PosedBodies::useMaskedPlaneScan(path == 0);
+    PosedBodies::useWidePlaneScan(path < 2);
     PosedBodies none;
     none.set({}, {});
     std::vector<int> hints(s.points.size(), -1);
@@ -372,6 +377,41 @@ TEST(PosedBodies, ManyPointsQueriesHandleEmptyInputTiesAndBadPoints) {
     EXPECT_FALSE(hits.back().distance < 0.06f) << "a NaN point attaches nowhere";
   }
   PosedBodies::useWidePlaneScan(true);
+  PosedBodies::useMaskedPlaneScan(true);
+}
+
+// Points equally far from two or more faces of a cube (its centre, its diagonals, its
+// symmetry planes): every path of the bulk queries picks the lowest face, as the one-point
+// queries do.
+TEST(PosedBodies, ManyPointsQueriesBreakFaceTiesLikeOnePointQueries) {
+  const physics::ConvexShape cube = physics::ConvexShape::box(Vec3(0.02f, 0.02f, 0.02f));
+  const std::vector<const physics::ConvexShape*> shapes{&cube};
+  const std::vector<Pose> poses{{Vec3(0.0f, 0.0f, 0.5f), Quat::Identity()}};
+  PosedBodies bodies;
+  bodies.set(shapes, poses);
+  std::vector<Vec3> points;
+  for (int i = -4; i <= 4; ++i)
+    for (int j = -4; j <= 4; ++j) {
+      const float a = static_cast<float>(i) / 256.0f, b = static_cast<float>(j) / 256.0f;
+      points.emplace_back(a, a, 0.5f + b);        // x = y: the +-x and +-y faces tie
+      points.emplace_back(a, b, 0.5f + a);        // x = z
+      points.emplace_back(0.0f, 0.0f, 0.5f + a);  // on the axis: four faces tie
+    }
+  for (const int path : {0, 1, 2}) {  // AVX-512 masks, AVX, narrow
+    PosedBodies::useMaskedPlaneScan(path == 0);
+    PosedBodies::useWidePlaneScan(path < 2);
+    std::vector<int> hints(points.size(), 0);
+    std::vector<SurfaceHit> hits(points.size()), exactHits(points.size());
+    bodies.nearestPlanarMany(points, hints, hits);
+    bodies.nearestMany(points, std::vector<int>(points.size(), 0), exactHits);
+    PosedBodies::useWidePlaneScan(false);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      EXPECT_EQ(hits[i].face, bodies.nearestPlanar(points[i], kAllBodies, 0).face) << path;
+      EXPECT_EQ(exactHits[i].face, bodies.nearest(points[i], kAllBodies, 0).face) << path;
+    }
+  }
+  PosedBodies::useWidePlaneScan(true);
+  PosedBodies::useMaskedPlaneScan(true);
 }
 
 // The AVX plane scan (where the CPU has it) and the SSE one give the same bits.

@@ -47,6 +47,14 @@ __attribute__((target("avx"), always_inline)) inline __m256 planeDistance8(__m25
                        o);
 }
 
+// Plane f of a table (SoA) for the eight lanes.
+__attribute__((target("avx"), always_inline)) inline __m256 planeDistance8(
+    const float* nx, const float* ny, const float* nz, const float* o, std::size_t f, __m256 qx,
+    __m256 qy, __m256 qz) {
+  return planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
+                        _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
+}
+
 // |p - c| - r lane by lane (sphereGap's arithmetic: x^2 + (y^2 + z^2), Eigen's order for a
 // 3-vector's squared norm, so the scalar paths give the same bits).
 __attribute__((target("avx"), always_inline)) inline __m256 sphereGap8(__m256 px, __m256 py,
@@ -177,6 +185,16 @@ __attribute__((target("avx"), always_inline)) inline void toLocal8(const Quat& r
                      _mm256_sub_ps(_mm256_mul_ps(ux, cy), _mm256_mul_ps(uy, cx)));
 }
 
+// toLocal8 of the eight points (wx, wy, wz), also stored to (lx, ly, lz).
+__attribute__((target("avx"), always_inline)) inline void localPoints8(
+    const Quat& rotation, const Vec3& t, const float* wx, const float* wy, const float* wz,
+    float* lx, float* ly, float* lz, __m256& qx, __m256& qy, __m256& qz) {
+  toLocal8(rotation, t, _mm256_load_ps(wx), _mm256_load_ps(wy), _mm256_load_ps(wz), qx, qy, qz);
+  _mm256_store_ps(lx, qx);
+  _mm256_store_ps(ly, qy);
+  _mm256_store_ps(lz, qz);
+}
+
 // Eight points at once (one per lane), for one body: the points in the body frame (toLocal's
 // arithmetic), each one's largest plane distance and its face, lowest index on ties
 // (maxPlaneDistance's answer: the first plane holding a lane's maximum). Stops early once
@@ -189,10 +207,7 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
                                                  const float* stop, float* lx, float* ly, float* lz,
                                                  float* largest, std::int32_t* face) {
   __m256 qx, qy, qz;
-  toLocal8(rotation, t, _mm256_load_ps(wx), _mm256_load_ps(wy), _mm256_load_ps(wz), qx, qy, qz);
-  _mm256_store_ps(lx, qx);
-  _mm256_store_ps(ly, qy);
-  _mm256_store_ps(lz, qz);
+  localPoints8(rotation, t, wx, wy, wz, lx, ly, lz, qx, qy, qz);
   __m256 best = _mm256_set1_ps(-1e30f);
   __m256 index = _mm256_setzero_ps();
   __m256 plane = _mm256_setzero_ps();
@@ -203,9 +218,7 @@ __attribute__((target("avx"))) void scanEightAvx(const Quat& rotation, const Vec
   for (std::size_t group = 0; group < count; group += 8) {
 #pragma GCC unroll 8
     for (std::size_t f = group; f < group + 8; ++f) {
-      const __m256 d =
-          planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
-                         _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
+      const __m256 d = planeDistance8(nx, ny, nz, o, f, qx, qy, qz);
       keepLargest(d, plane, best, index);
       plane = _mm256_add_ps(plane, one);
     }
@@ -231,19 +244,14 @@ __attribute__((target("avx512f,avx512vl"))) void scanEightAvx512(
     const float* nx, const float* ny, const float* nz, const float* o, std::size_t count,
     const float* stop, float* lx, float* ly, float* lz, float* largest, std::int32_t* face) {
   __m256 qx, qy, qz;
-  toLocal8(rotation, t, _mm256_load_ps(wx), _mm256_load_ps(wy), _mm256_load_ps(wz), qx, qy, qz);
-  _mm256_store_ps(lx, qx);
-  _mm256_store_ps(ly, qy);
-  _mm256_store_ps(lz, qz);
+  localPoints8(rotation, t, wx, wy, wz, lx, ly, lz, qx, qy, qz);
   __m256 best = _mm256_set1_ps(-1e30f);
   __m256 index = _mm256_setzero_ps();
   const __m256 stopAbove = _mm256_load_ps(stop);
   for (std::size_t group = 0; group < count; group += 8) {
 #pragma GCC unroll 8
     for (std::size_t f = group; f < group + 8; ++f) {
-      const __m256 d =
-          planeDistance8(_mm256_broadcast_ss(nx + f), _mm256_broadcast_ss(ny + f),
-                         _mm256_broadcast_ss(nz + f), _mm256_broadcast_ss(o + f), qx, qy, qz);
+      const __m256 d = planeDistance8(nx, ny, nz, o, f, qx, qy, qz);
       const __mmask8 better = _mm256_cmp_ps_mask(d, best, _CMP_GT_OQ);
       best = _mm256_max_ps(d, best);
       index = _mm256_mask_blend_ps(better, index, _mm256_broadcast_ss(kPlaneNumber.value + f));
@@ -414,25 +422,23 @@ SurfaceHit PosedBodies::exactHit(std::size_t body, const Vec3& local, float plan
   return {static_cast<int>(body), face, std::abs(sd), sd, closest};
 }
 
-bool PosedBodies::useMaskedPlaneScan(bool enabled) {
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
+bool PosedBodies::useMaskedPlaneScan(bool enabled) {
   maskScan.store(enabled && cpuHasAvx512vl());
   return maskScan.load();
-#else
-  (void)enabled;
-  return false;
-#endif
 }
-
 bool PosedBodies::useWidePlaneScan(bool enabled) {
-#if defined(DYNAHAND_PLANE_SCAN_AVX)
   wideScan.store(enabled && cpuHasAvx());
   return wideScan.load();
-#else
-  (void)enabled;
-  return false;
-#endif
 }
+#else
+bool PosedBodies::useMaskedPlaneScan(bool) {
+  return false;
+}
+bool PosedBodies::useWidePlaneScan(bool) {
+  return false;
+}
+#endif
 
 float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
                                     float stopAbove) {

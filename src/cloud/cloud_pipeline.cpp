@@ -97,11 +97,13 @@ struct CloudPipeline::Impl {
   }
   std::vector<Fragment> fragments;
   std::vector<std::int32_t> fragmentCells;
+  std::vector<const Fragment*> joining;  // mergePieces' scratch
 
   Impl(const Intrinsics& intrinsics, const CloudConfig& cfg)
       : k(intrinsics), config(cfg), voxels(cfg.voxelSizeM, cfg.maxVoxels) {
     // At most one piece per seed attempt, and a fine grid's cells once (more are not kept).
     fragments.reserve(static_cast<std::size_t>(std::max(1, cfg.segmentation.maxSeedAttempts)));
+    joining.reserve(fragments.capacity());
     fragmentCells.reserve(static_cast<std::size_t>(intrinsics.width) *
                           static_cast<std::size_t>(std::max(0, intrinsics.height)));
   }
@@ -235,16 +237,19 @@ bool CloudPipeline::Impl::mergePieces(CellLabel label, GrownRegion& region) {
                                  [&](const Fragment& f) { return !isSpeck(f); });
   if (lead == fragments.end()) return false;
   const Vec3 centre = lead->region.nearestPoint;
+  joining.clear();        // the pieces that join the lead one (itself included), decided once
   float estimate = 0.0f;  // pieces may overlap: an upper bound
-  for (const Fragment& f : fragments)
-    if (joins(f, centre, kPieceDepthM)) estimate += f.region.areaM2;
+  for (const Fragment& f : fragments) {
+    if (!joins(f, centre, kPieceDepthM)) continue;
+    joining.push_back(&f);
+    estimate += f.region.areaM2;
+  }
   if (estimate < seg.minAreaM2) return false;
   auto relabel = [&](CellLabel to) {
     float area = 0.0f;
-    for (const Fragment& f : fragments)
-      if (joins(f, centre, kPieceDepthM))
-        area += fineGrower.labelCellsWithin(fragmentCells.data() + f.begin, f.end - f.begin, to,
-                                            centre, seg.handRadiusM);
+    for (const Fragment* f : joining)
+      area += fineGrower.labelCellsWithin(fragmentCells.data() + f->begin, f->end - f->begin, to,
+                                          centre, seg.handRadiusM);
     return area;
   };
   const float area = relabel(label);
@@ -260,10 +265,9 @@ bool CloudPipeline::Impl::mergePieces(CellLabel label, GrownRegion& region) {
   merged.cutCount = 0;
   merged.cutPointSum = Vec3::Zero();
   merged.cutPixelSum = Vec2::Zero();
-  for (const Fragment& f : fragments) {
-    if (!joins(f, centre, kPieceDepthM)) continue;
-    merged.cellCount += f.region.cellCount;
-    includeBox(merged, f.region);
+  for (const Fragment* f : joining) {
+    merged.cellCount += f->region.cellCount;
+    includeBox(merged, f->region);
   }
   region = merged;
   return true;

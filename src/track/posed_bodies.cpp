@@ -151,11 +151,13 @@ __attribute__((target("avx"))) float sphereBoundsAvx(const Vec3& p, const float*
   return m;
 }
 
-// Plane numbers as floats, for the AVX-512 scan's index (the shapes here have far fewer).
+// Plane numbers as floats, for the AVX-512 scan's index: shapes of up to kMaskedScanPlanes
+// planes (the hand's have at most 136 with padding) take that scan.
+constexpr std::size_t kMaskedScanPlanes = 512;
 struct PlaneNumbers {
-  float value[512]{};
+  float value[kMaskedScanPlanes]{};
   constexpr PlaneNumbers() {
-    for (int f = 0; f < 512; ++f) value[f] = static_cast<float>(f);
+    for (std::size_t f = 0; f < kMaskedScanPlanes; ++f) value[f] = static_cast<float>(f);
   }
 };
 constexpr PlaneNumbers kPlaneNumber;
@@ -606,6 +608,7 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
   testCount_.assign(bodyCount, 0);
   if (n == 0) return;
 
+  const bool masked = maskScan.load(std::memory_order_relaxed);
   // Tests every point listed for each body, eight per scan, keeping each point's least
   // (distance, body): the planar answer, or the exact one from the plane scan's bound.
   auto runTests = [&] {
@@ -625,7 +628,7 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
           wz[k] = pz_[i];
           stop[k] = bestDistance_[i];
         }
-        if (maskScan.load(std::memory_order_relaxed) && planes <= 512)
+        if (masked && planes <= kMaskedScanPlanes)
           scanEightAvx512(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
                           table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, largest,
                           face);

@@ -1,13 +1,13 @@
 // Surface rows (one body each, the tracker's thousands of point-on-plane constraints) packed
-// four to a batch, the four on different solver slots, and solved four at a time with SSE.
-// Within a batch the rows touch different bodies, so solving them together is the same as
-// solving them one after another: still projected Gauss-Seidel, in batch order. Rows are
-// dealt into batches so that a slot's rows never share one. A slot holding more than a
-// quarter of the rows, and at least 32 (a welded hand: all of them), would make batches of
-// its own, three lanes
-// idle; its rows are instead spread over several copies of the slot, each with that share of
-// its mass, whose velocities are averaged after every sweep (mass splitting, Tonge et al.
-// 2012), so the sweep stays four rows wide.
+// eight to a batch, the eight on different solver slots, and solved eight at a time with AVX
+// (SSE: two halves of four). Within a batch the rows touch different bodies, so solving them
+// together is the same as solving them one after another: still projected Gauss-Seidel.
+// Since every row moves one body only, a sweep's result depends on nothing but each slot's
+// order of its rows; the batches only schedule the slots' chains side by side. A slot
+// holding more than a quarter of the rows, and at least 32 (a welded hand: all of them),
+// would be one long chain; its rows are instead spread over several copies of the slot,
+// each with that share of its mass, whose velocities are averaged after every sweep (mass
+// splitting, Tonge et al. 2012).
 #pragma once
 
 #include <vector>
@@ -35,8 +35,8 @@ class SurfaceBatches {
   // One sweep over every row, with the position bias (solve) or the relax bias.
   void solve(std::vector<SolverBody>& bodies, bool useBias);
   // a.solve(bodiesA, useBias) and b.solve(bodiesB, useBias) (of two different worlds) side by
-  // side, a's four lanes and b's four in one eight-wide AVX register: each lane does exactly
-  // what solve() does, so the same bits, but the two sweeps' latency chains overlap.
+  // side, batch by batch: each lane does exactly what solve() does, so the same bits, but the
+  // two sweeps' latency chains overlap.
   static void solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA, SurfaceBatches& b,
                             std::vector<SolverBody>& bodiesB, bool useBias);
   // Whether solveTogether runs side by side here (the CPU has AVX); otherwise it solves one
@@ -47,12 +47,16 @@ class SurfaceBatches {
   void reserve(int rows);
 
  private:
-  struct alignas(16) Batch {
-    int slot[4];
-    int row[4];  // index in build()'s input; -1 for padding
-    float nx[4], ny[4], nz[4], ax[4], ay[4], az[4], ix[4], iy[4], iz[4];
-    float ux[4], uy[4], uz[4];  // normal * the body's inverse mass
-    float effMass[4], bias[4], relaxBias[4], lower[4], upper[4], impulse[4];
+  friend struct SurfaceSweeps;  // solveTogether's loop (surface_batches.cpp)
+  static constexpr int kLanes = 8;
+  struct alignas(32) Batch {
+    int slot[kLanes];
+    int row[kLanes];  // index in build()'s input; -1 for padding
+    float nx[kLanes], ny[kLanes], nz[kLanes], ax[kLanes], ay[kLanes], az[kLanes];
+    float ix[kLanes], iy[kLanes], iz[kLanes];
+    float ux[kLanes], uy[kLanes], uz[kLanes];  // normal * the body's inverse mass
+    float effMass[kLanes], bias[kLanes], relaxBias[kLanes], lower[kLanes], upper[kLanes];
+    float impulse[kLanes];
   };
   // A slot whose rows are spread over `copies` copies, solver slots `first`... of copies_.
   struct Split {
@@ -62,7 +66,16 @@ class SurfaceBatches {
   void beginCopies(const std::vector<SolverBody>& bodies);  // every copy = its slot
   void endCopies(std::vector<SolverBody>& bodies) const;    // each split slot = its copies' mean
 
+  void place(Batch& b, int lane, const PreparedSurfaceRow& r, int row,
+             const std::vector<SolverBody>& bodies);
+  void solveFallback(std::vector<SolverBody>& bodies, bool useBias);
+
   std::vector<Batch> batches_;
+  // (batches) whether some lane's slot differs from the batch before (the first: 0), when
+  // the sweep writes its lanes' bodies back and loads the next ones
+  std::vector<unsigned char> reload_;
+  std::vector<int> spread_;   // scratch: one slot's rows in dealing order
+  std::vector<int> cellRow_;  // scratch: the row in each cell, counted down the columns
   std::vector<int> order_, count_, start_, slotsByCount_;
   std::vector<int> virtualSlot_;  // (rows) the slot or copy a row is solved on
   std::vector<Split> splits_;

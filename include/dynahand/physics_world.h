@@ -274,9 +274,17 @@ class World {
   // default), else one by one; both give identical bits. false forces the narrow path (for
   // tests comparing the two); returns whether the wide path is now in use.
   static bool useWideSurfacePrepare(bool enabled);
-  // a.step(dt) and b.step(dt) (two different worlds with the same iteration counts), with
-  // the same bits, in less time: their surface-row sweeps run side by side, eight rows per
-  // AVX instruction, where the CPU has AVX (otherwise simply one step after the other).
+  // step() solves the surface rows eight at a time with AVX where the CPU has it (on by
+  // default), else one by one; both give identical bits. false forces the one-by-one path
+  // (for tests comparing the two); returns whether the vector path is now in use.
+  static bool useVectorSweeps(bool enabled);
+  // w->step(dt) for each of several different worlds with the same iteration counts, with
+  // the same bits, in less time: their Gauss-Seidel sweeps run side by side, up to
+  // kMaxSideBySide at once (more are stepped in groups), where the CPU has AVX (otherwise
+  // simply one step after the other).
+  static constexpr std::size_t kMaxSideBySide = 4;
+  static void stepSideBySide(std::span<World* const> worlds, float dt);
+  // stepSideBySide of two worlds.
   static void stepTogether(World& a, World& b, float dt);
 
   void saveState(WorldState& out) const { out = state_; }
@@ -292,7 +300,7 @@ class World {
   struct Impl;  // body/row arrays and scratch (src/physics/world_impl.h)
 
  private:
-  // step() in parts (solver.cpp), so that stepTogether can interleave two worlds' sweeps:
+  // step() in parts (solver.cpp), so that stepSideBySide can interleave worlds' sweeps:
   // slots, rows and warm start; positions integrated (then the joints projected); impulses
   // stored and the state written back. Between them, the sweeps.
   void beginStep(float h);

@@ -7,12 +7,15 @@
 // Position error C enters as bias = erp C / dt (rows that must reach C = 0) or, for one-sided
 // rows (C >= 0) that are not yet violated, as the speculative bias C / dt (the row only acts
 // if the velocity would cross the boundary within this step). The relax sweeps drop the erp
-// part so the correction velocity does not survive as momentum. World::stepTogether runs two
-// worlds' sweeps side by side, each in its own order (the same bits as stepping them alone).
+// part so the correction velocity does not survive as momentum. World::stepSideBySide runs
+// several worlds' sweeps side by side, each in its own order (the same bits as stepping them
+// alone).
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include "physics/rows.h"
 
@@ -116,17 +119,19 @@ void solveRows(std::vector<SolverBody>& sb, std::vector<Row>& rows, bool useBias
   for (std::size_t i = 0; i < rows.size();) i = solveRowBlock(sb, rows, i, useBias);
 }
 
-// solveRows of two worlds, block by block in turn: each world's rows in their own order (the
-// same bits), the two chains of dependent rows overlapping in the CPU.
-void solveRowsTogether(std::vector<SolverBody>& sbA, std::vector<Row>& rowsA,
-                       std::vector<SolverBody>& sbB, std::vector<Row>& rowsB, bool useBias) {
-  std::size_t a = 0, b = 0;
-  while (a < rowsA.size() && b < rowsB.size()) {
-    a = solveRowBlock(sbA, rowsA, a, useBias);
-    b = solveRowBlock(sbB, rowsB, b, useBias);
+// solveRows of several worlds, block by block in turn: each world's rows in their own order
+// (the same bits), the worlds' chains of dependent rows overlapping in the CPU.
+void solveRowsSideBySide(std::span<World::Impl* const> worlds, bool useBias) {
+  std::array<std::size_t, World::kMaxSideBySide> at{};
+  for (bool any = true; any;) {
+    any = false;
+    for (std::size_t w = 0; w < worlds.size(); ++w) {
+      World::Impl& m = *worlds[w];
+      if (at[w] == m.rows.size()) continue;
+      at[w] = solveRowBlock(m.solverBodies, m.rows, at[w], useBias);
+      any = true;
+    }
   }
-  while (a < rowsA.size()) a = solveRowBlock(sbA, rowsA, a, useBias);
-  while (b < rowsB.size()) b = solveRowBlock(sbB, rowsB, b, useBias);
 }
 
 Mat3 invInertiaMatrix(const SolverBody& b) {
@@ -159,18 +164,13 @@ void solvePointBlocks(std::vector<SolverBody>& sb, std::vector<World::Impl::Poin
   for (World::Impl::PointBlock& p : blocks) solvePointBlock(sb, p, useBias);
 }
 
-// solvePointBlocks of two worlds, block by block in turn (as solveRowsTogether).
-void solvePointBlocksTogether(std::vector<SolverBody>& sbA,
-                              std::vector<World::Impl::PointBlock>& blocksA,
-                              std::vector<SolverBody>& sbB,
-                              std::vector<World::Impl::PointBlock>& blocksB, bool useBias) {
-  const std::size_t both = std::min(blocksA.size(), blocksB.size());
-  for (std::size_t i = 0; i < both; ++i) {
-    solvePointBlock(sbA, blocksA[i], useBias);
-    solvePointBlock(sbB, blocksB[i], useBias);
-  }
-  for (std::size_t i = both; i < blocksA.size(); ++i) solvePointBlock(sbA, blocksA[i], useBias);
-  for (std::size_t i = both; i < blocksB.size(); ++i) solvePointBlock(sbB, blocksB[i], useBias);
+// solvePointBlocks of several worlds, block by block in turn (as solveRowsSideBySide).
+void solvePointBlocksSideBySide(std::span<World::Impl* const> worlds, bool useBias) {
+  std::size_t most = 0;
+  for (World::Impl* m : worlds) most = std::max(most, m->pointBlocks.size());
+  for (std::size_t i = 0; i < most; ++i)
+    for (World::Impl* m : worlds)
+      if (i < m->pointBlocks.size()) solvePointBlock(m->solverBodies, m->pointBlocks[i], useBias);
 }
 
 // Nonlinear Gauss-Seidel on the joint anchors (Box2D v2's position solver, block 3x3):
@@ -211,17 +211,14 @@ void projectJointPositions(World::Impl& m, int iterations) {
     for (std::size_t idx = 0; idx < m.jointPositions.size(); ++idx) projectJoint(m, idx);
 }
 
-// projectJointPositions of two worlds, joint by joint in turn (as solveRowsTogether).
-void projectJointPositionsTogether(World::Impl& a, World::Impl& b, int iterations) {
-  const std::size_t both = std::min(a.jointPositions.size(), b.jointPositions.size());
-  for (int it = 0; it < iterations; ++it) {
-    for (std::size_t idx = 0; idx < both; ++idx) {
-      projectJoint(a, idx);
-      projectJoint(b, idx);
-    }
-    for (std::size_t idx = both; idx < a.jointPositions.size(); ++idx) projectJoint(a, idx);
-    for (std::size_t idx = both; idx < b.jointPositions.size(); ++idx) projectJoint(b, idx);
-  }
+// projectJointPositions of several worlds, joint by joint in turn (as solveRowsSideBySide).
+void projectJointPositionsSideBySide(std::span<World::Impl* const> worlds, int iterations) {
+  std::size_t most = 0;
+  for (World::Impl* m : worlds) most = std::max(most, m->jointPositions.size());
+  for (int it = 0; it < iterations; ++it)
+    for (std::size_t idx = 0; idx < most; ++idx)
+      for (World::Impl* m : worlds)
+        if (idx < m->jointPositions.size()) projectJoint(*m, idx);
 }
 }  // namespace
 
@@ -266,35 +263,58 @@ void World::step(float h) {
   endStep();
 }
 
+bool World::useVectorSweeps(bool enabled) {
+  return SurfaceBatches::useVectorSweeps(enabled);
+}
+
 void World::stepTogether(World& a, World& b, float h) {
-  assert(h > 0.0f && std::isfinite(h) && "stepTogether: dt must be positive");
-  if (&a == &b || a.settings_.iterations != b.settings_.iterations ||
-      a.settings_.relaxIterations != b.settings_.relaxIterations ||
-      a.settings_.positionIterations != b.settings_.positionIterations ||
-      !SurfaceBatches::canSolveTogether()) {
-    a.step(h);
-    b.step(h);
+  World* const both[2] = {&a, &b};
+  stepSideBySide(both, h);
+}
+
+void World::stepSideBySide(std::span<World* const> worlds, float h) {
+  assert(h > 0.0f && std::isfinite(h) && "stepSideBySide: dt must be positive");
+  if (worlds.size() > kMaxSideBySide) {
+    stepSideBySide(worlds.first(kMaxSideBySide), h);
+    stepSideBySide(worlds.subspan(kMaxSideBySide), h);
+    return;
+  }
+  bool alike = SurfaceBatches::canSolveSideBySide();
+  for (std::size_t w = 1; w < worlds.size() && alike; ++w) {
+    const WorldSettings& first = worlds[0]->settings_;
+    const WorldSettings& other = worlds[w]->settings_;
+    alike = first.iterations == other.iterations &&
+            first.relaxIterations == other.relaxIterations &&
+            first.positionIterations == other.positionIterations;
+    for (std::size_t v = 0; v < w; ++v) alike = alike && worlds[v] != worlds[w];
+  }
+  if (!alike || worlds.size() < 2) {
+    for (World* w : worlds) w->step(h);
     return;
   }
   const FlushDenormals flushDenormals;
-  a.beginStep(h);
-  b.beginStep(h);
-  Impl& ma = *a.impl_;
-  Impl& mb = *b.impl_;
+  std::array<Impl*, kMaxSideBySide> impls{};
+  std::array<SurfaceBatches*, kMaxSideBySide> sweeps{};
+  std::array<std::vector<SolverBody>*, kMaxSideBySide> bodies{};
+  const std::size_t n = worlds.size();
+  for (std::size_t w = 0; w < n; ++w) {
+    worlds[w]->beginStep(h);
+    impls[w] = worlds[w]->impl_.get();
+    sweeps[w] = &impls[w]->surfaceBatches;
+    bodies[w] = &impls[w]->solverBodies;
+  }
+  const std::span<Impl* const> all(impls.data(), n);
   auto sweep = [&](bool useBias) {
-    SurfaceBatches::solveTogether(ma.surfaceBatches, ma.solverBodies, mb.surfaceBatches,
-                                  mb.solverBodies, useBias);
-    solveRowsTogether(ma.solverBodies, ma.rows, mb.solverBodies, mb.rows, useBias);
-    solvePointBlocksTogether(ma.solverBodies, ma.pointBlocks, mb.solverBodies, mb.pointBlocks,
-                             useBias);
+    SurfaceBatches::solveSideBySide({sweeps.data(), n}, {bodies.data(), n}, useBias);
+    solveRowsSideBySide(all, useBias);
+    solvePointBlocksSideBySide(all, useBias);
   };
-  for (int it = 0; it < a.settings_.iterations; ++it) sweep(true);
-  a.integrate(h);
-  b.integrate(h);
-  projectJointPositionsTogether(ma, mb, a.settings_.positionIterations);
-  for (int it = 0; it < a.settings_.relaxIterations; ++it) sweep(false);
-  a.endStep();
-  b.endStep();
+  const WorldSettings& settings = worlds[0]->settings_;
+  for (int it = 0; it < settings.iterations; ++it) sweep(true);
+  for (World* w : worlds) w->integrate(h);
+  projectJointPositionsSideBySide(all, settings.positionIterations);
+  for (int it = 0; it < settings.relaxIterations; ++it) sweep(false);
+  for (World* w : worlds) w->endStep();
 }
 
 void World::beginStep(float h) {

@@ -4,6 +4,8 @@
 #include "physics/world_impl.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cassert>
 #include <cstddef>
 #include <numeric>
 
@@ -27,27 +29,23 @@ void SurfaceBatches::reserve(int rows) {
   order_.reserve(n);
 }
 
-inline void SurfaceBatches::place(Batch& b, int k, const PreparedSurfaceRow& r, int row,
-                                  const std::vector<SolverBody>& bodies) {
-  b.slot[k] = virtualSlot_[static_cast<std::size_t>(row)];
-  b.row[k] = row;
+inline void SurfaceBatches::place(Batch& b, BatchLanes& lanes, int k, const PreparedSurfaceRow& r,
+                                  int row) {
+  lanes.slot[k] = virtualSlot_[static_cast<std::size_t>(row)];
+  lanes.row[k] = row;
   b.nx[k] = r.normal.x();
   b.ny[k] = r.normal.y();
   b.nz[k] = r.normal.z();
   b.ax[k] = r.ang.x();
   b.ay[k] = r.ang.y();
   b.az[k] = r.ang.z();
-  // A copy holds 1/copies of its slot's mass: inverse mass and inertia times copies (exactly
-  // the slot's own values for an unsplit slot, copies = 1).
+  // A copy holds 1/copies of its slot's mass: inverse inertia times copies (exactly the
+  // slot's own values for an unsplit slot, copies = 1); the inverse mass, in massScale_.
   const float copies = slotCopies_[static_cast<std::size_t>(r.slot)];
-  const float invMass = bodies[static_cast<std::size_t>(r.slot)].invMass * copies;
   b.ix[k] = r.invIAng.x() * copies;
   b.iy[k] = r.invIAng.y() * copies;
   b.iz[k] = r.invIAng.z() * copies;
   b.effMass[k] = r.effMass / copies;
-  b.ux[k] = r.normal.x() * invMass;
-  b.uy[k] = r.normal.y() * invMass;
-  b.uz[k] = r.normal.z() * invMass;
   b.bias[k] = r.bias;
   b.relaxBias[k] = r.relaxBias;
   b.lower[k] = r.lower;
@@ -101,6 +99,11 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     }
   }
   const int slotCountAll = slotCount_ + copyCount;
+  massScale_.assign(static_cast<std::size_t>(slotCountAll), 1.0f);
+  for (const Split& sp : splits_)
+    for (int j = 0; j < sp.copies; ++j)
+      massScale_[static_cast<std::size_t>(slotCount_ + sp.first + j)] =
+          static_cast<float>(sp.copies);
   const auto slots = static_cast<std::size_t>(slotCountAll);
   // Rows grouped by solving slot (counting sort, stable), slots by decreasing row count.
   count_.assign(slots, 0);
@@ -148,6 +151,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   const int orderBatches = std::max((n + kOrderLanes - 1) / kOrderLanes, largest);
   const int batchCount = std::max((n + kLanes - 1) / kLanes, largest);
   batches_.resize(static_cast<std::size_t>(batchCount));
+  lanes_.resize(static_cast<std::size_t>(batchCount));
   cellRow_.assign(static_cast<std::size_t>(batchCount) * kLanes, -1);
   // Rows from `position` on, `length` of them, wrap in a table `height` batches high after
   // the returned count (length when they do not wrap).
@@ -183,24 +187,25 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   // once per row). Cells left over are padding on the dummy slot, all zero: they never act.
   for (int column = 0; column < batchCount; ++column) {
     Batch& b = batches_[static_cast<std::size_t>(column)];
+    BatchLanes& l = lanes_[static_cast<std::size_t>(column)];
     for (int lane = 0; lane < kLanes; ++lane) {
       const int i = cellRow_[static_cast<std::size_t>(lane * batchCount + column)];
       if (i >= 0) {
-        place(b, lane, rows[static_cast<std::size_t>(i)], i, bodies);
+        place(b, l, lane, rows[static_cast<std::size_t>(i)], i);
         continue;
       }
-      b.slot[lane] = dummySlot;
-      b.row[lane] = -1;
+      l.slot[lane] = dummySlot;
+      l.row[lane] = -1;
       b.nx[lane] = b.ny[lane] = b.nz[lane] = b.ax[lane] = b.ay[lane] = b.az[lane] = 0.0f;
       b.ix[lane] = b.iy[lane] = b.iz[lane] = 0.0f;
-      b.ux[lane] = b.uy[lane] = b.uz[lane] = 0.0f;
       b.effMass[lane] = b.bias[lane] = b.relaxBias[lane] = b.lower[lane] = b.upper[lane] = 0.0f;
       b.impulse[lane] = 0.0f;
     }
   }
-  reload_.assign(static_cast<std::size_t>(batchCount), 0);
+  changed_.assign(static_cast<std::size_t>(batchCount), 0);
   for (std::size_t i = 1; i < batches_.size(); ++i)
-    reload_[i] = !std::equal(batches_[i].slot, batches_[i].slot + kLanes, batches_[i - 1].slot);
+    for (int k = 0; k < kLanes; ++k)
+      if (lanes_[i].slot[k] != lanes_[i - 1].slot[k]) changed_[i] |= 1u << k;
 }
 
 float* SurfaceBatches::laneBody(std::vector<SolverBody>& bodies, int slot) {
@@ -230,16 +235,18 @@ void SurfaceBatches::endCopies(std::vector<SolverBody>& bodies) const {
 }
 
 void SurfaceBatches::writeImpulses(float* impulses) const {
-  for (const Batch& b : batches_)
+  for (std::size_t i = 0; i < batches_.size(); ++i)
     for (int k = 0; k < kLanes; ++k)
-      if (b.row[k] >= 0) impulses[b.row[k]] = b.impulse[k];
+      if (lanes_[i].row[k] >= 0) impulses[lanes_[i].row[k]] = batches_[i].impulse[k];
 }
 
 void SurfaceBatches::solveFallback(std::vector<SolverBody>& bodies, bool useBias) {
   beginCopies(bodies);
-  for (Batch& b : batches_) {
+  for (std::size_t i = 0; i < batches_.size(); ++i) {
+    Batch& b = batches_[i];
     for (int k = 0; k < kLanes; ++k) {
-      SolverBody& body = *reinterpret_cast<SolverBody*>(laneBody(bodies, b.slot[k]));
+      const int slot = lanes_[i].slot[k];
+      SolverBody& body = *reinterpret_cast<SolverBody*>(laneBody(bodies, slot));
       // Summed as the vector paths sum: (x + y) + z.
       const float jv = ((b.nx[k] * body.v.x() + b.ny[k] * body.v.y()) + b.nz[k] * body.v.z()) +
                        ((b.ax[k] * body.w.x() + b.ay[k] * body.w.y()) + b.az[k] * body.w.z());
@@ -248,7 +255,8 @@ void SurfaceBatches::solveFallback(std::vector<SolverBody>& bodies, bool useBias
       const float clamped = std::min(std::max(base - b.effMass[k] * jv, b.lower[k]), b.upper[k]);
       const float d = clamped - old;
       b.impulse[k] = clamped;
-      body.v += d * Vec3(b.ux[k], b.uy[k], b.uz[k]);
+      const float invMass = body.invMass * massScale_[static_cast<std::size_t>(slot)];
+      body.v += d * Vec3(b.nx[k] * invMass, b.ny[k] * invMass, b.nz[k] * invMass);
       body.w += d * Vec3(b.ix[k], b.iy[k], b.iz[k]);
     }
   }
@@ -259,66 +267,45 @@ void SurfaceBatches::solveFallback(std::vector<SolverBody>& bodies, bool useBias
 namespace {
 const bool kHasAvx = cpuHasAvx();
 
-// SolverBody starts with (v, invMass) and (w, pad): one unaligned load each per lane, and a
-// 4x4 transpose turns four bodies into x, y, z (and invMass) registers.
-struct LaneBodies {
-  __m128 vx, vy, vz, invMass, wx, wy, wz, pad;
-  void load(float* const p[4]) {
-    vx = _mm_loadu_ps(p[0]);
-    vy = _mm_loadu_ps(p[1]);
-    vz = _mm_loadu_ps(p[2]);
-    invMass = _mm_loadu_ps(p[3]);
-    _MM_TRANSPOSE4_PS(vx, vy, vz, invMass);
-    wx = _mm_loadu_ps(p[0] + 4);
-    wy = _mm_loadu_ps(p[1] + 4);
-    wz = _mm_loadu_ps(p[2] + 4);
-    pad = _mm_loadu_ps(p[3] + 4);
-    _MM_TRANSPOSE4_PS(wx, wy, wz, pad);
-  }
-  // Padding lanes share the dummy slot; their values never change, so any store order works.
-  void store(float* const p[4]) const {
-    __m128 a = vx, b = vy, c = vz, d = invMass;
-    _MM_TRANSPOSE4_PS(a, b, c, d);
-    _mm_storeu_ps(p[0], a);
-    _mm_storeu_ps(p[1], b);
-    _mm_storeu_ps(p[2], c);
-    _mm_storeu_ps(p[3], d);
-    a = wx, b = wy, c = wz, d = pad;
-    _MM_TRANSPOSE4_PS(a, b, c, d);
-    _mm_storeu_ps(p[0] + 4, a);
-    _mm_storeu_ps(p[1] + 4, b);
-    _mm_storeu_ps(p[2] + 4, c);
-    _mm_storeu_ps(p[3] + 4, d);
-  }
-};
-
-// The eight bodies of a batch's lanes, velocities in registers (lanes 0-3 low, 4-7 high).
+// The bodies of a sweep's eight lanes, their velocities in registers. A lane changes body
+// only where its column moves to the next slot (about one lane every sixth batch, rarely
+// several at once), so lanes are written back and loaded one by one.
 struct alignas(32) EightBodies {
   __m256 vx, vy, vz, wx, wy, wz;
-  __m128 invMass[2], pad[2];  // kept only to be written back
+  __m256 pull;  // the body's inverse mass x the lane's massScale_ (the normal's factor)
 
-  __attribute__((target("avx"))) void load(float* const p[8]) {
-    LaneBodies low, high;
-    low.load(p);
-    high.load(p + 4);
-    vx = _mm256_set_m128(high.vx, low.vx), vy = _mm256_set_m128(high.vy, low.vy);
-    vz = _mm256_set_m128(high.vz, low.vz), wx = _mm256_set_m128(high.wx, low.wx);
-    wy = _mm256_set_m128(high.wy, low.wy), wz = _mm256_set_m128(high.wz, low.wz);
-    invMass[0] = low.invMass, invMass[1] = high.invMass;
-    pad[0] = low.pad, pad[1] = high.pad;
+  // Lanes in `lanes` (a bit mask) write their velocities back to their bodies p[k].
+  __attribute__((target("avx"), always_inline)) inline void writeBack(unsigned lanes,
+                                                                      float* const p[8]) const {
+    alignas(32) float t[6][8];
+    _mm256_store_ps(t[0], vx);
+    _mm256_store_ps(t[1], vy);
+    _mm256_store_ps(t[2], vz);
+    _mm256_store_ps(t[3], wx);
+    _mm256_store_ps(t[4], wy);
+    _mm256_store_ps(t[5], wz);
+    for (; lanes != 0; lanes &= lanes - 1) {
+      const int k = __builtin_ctz(lanes);
+      SolverBody& body = *reinterpret_cast<SolverBody*>(p[k]);
+      body.v = Vec3(t[0][k], t[1][k], t[2][k]);
+      body.w = Vec3(t[3][k], t[4][k], t[5][k]);
+    }
   }
-  __attribute__((target("avx"))) void store(float* const p[8]) const {
-    LaneBodies low, high;
-    low.vx = _mm256_castps256_ps128(vx), low.vy = _mm256_castps256_ps128(vy);
-    low.vz = _mm256_castps256_ps128(vz), low.wx = _mm256_castps256_ps128(wx);
-    low.wy = _mm256_castps256_ps128(wy), low.wz = _mm256_castps256_ps128(wz);
-    high.vx = _mm256_extractf128_ps(vx, 1), high.vy = _mm256_extractf128_ps(vy, 1);
-    high.vz = _mm256_extractf128_ps(vz, 1), high.wx = _mm256_extractf128_ps(wx, 1);
-    high.wy = _mm256_extractf128_ps(wy, 1), high.wz = _mm256_extractf128_ps(wz, 1);
-    low.invMass = invMass[0], high.invMass = invMass[1];
-    low.pad = pad[0], high.pad = pad[1];
-    low.store(p);
-    high.store(p + 4);
+  // Lane k takes `body`, whose rows pull with `scale` times its inverse mass.
+  __attribute__((target("avx"), always_inline)) inline void loadLane(int k, const SolverBody& body,
+                                                                     float scale) {
+    alignas(32) static constexpr int kLaneMask[8][8] = {
+        {-1, 0, 0, 0, 0, 0, 0, 0}, {0, -1, 0, 0, 0, 0, 0, 0}, {0, 0, -1, 0, 0, 0, 0, 0},
+        {0, 0, 0, -1, 0, 0, 0, 0}, {0, 0, 0, 0, -1, 0, 0, 0}, {0, 0, 0, 0, 0, -1, 0, 0},
+        {0, 0, 0, 0, 0, 0, -1, 0}, {0, 0, 0, 0, 0, 0, 0, -1}};
+    const __m256 m = _mm256_load_ps(reinterpret_cast<const float*>(kLaneMask[k]));
+    vx = _mm256_blendv_ps(vx, _mm256_broadcast_ss(&body.v.x()), m);
+    vy = _mm256_blendv_ps(vy, _mm256_broadcast_ss(&body.v.y()), m);
+    vz = _mm256_blendv_ps(vz, _mm256_broadcast_ss(&body.v.z()), m);
+    wx = _mm256_blendv_ps(wx, _mm256_broadcast_ss(&body.w.x()), m);
+    wy = _mm256_blendv_ps(wy, _mm256_broadcast_ss(&body.w.y()), m);
+    wz = _mm256_blendv_ps(wz, _mm256_broadcast_ss(&body.w.z()), m);
+    pull = _mm256_blendv_ps(pull, _mm256_set1_ps(body.invMass * scale), m);
   }
 };
 
@@ -344,142 +331,184 @@ __attribute__((target("avx"), always_inline)) inline void solveBatch(Batch& b, E
       _mm256_load_ps(b.upper));
   _mm256_store_ps(b.impulse, clamped);
   const __m256 d = _mm256_sub_ps(clamped, old);
-  lane.vx = _mm256_add_ps(lane.vx, _mm256_mul_ps(d, _mm256_load_ps(b.ux)));
-  lane.vy = _mm256_add_ps(lane.vy, _mm256_mul_ps(d, _mm256_load_ps(b.uy)));
-  lane.vz = _mm256_add_ps(lane.vz, _mm256_mul_ps(d, _mm256_load_ps(b.uz)));
+  lane.vx =
+      _mm256_add_ps(lane.vx, _mm256_mul_ps(d, _mm256_mul_ps(_mm256_load_ps(b.nx), lane.pull)));
+  lane.vy =
+      _mm256_add_ps(lane.vy, _mm256_mul_ps(d, _mm256_mul_ps(_mm256_load_ps(b.ny), lane.pull)));
+  lane.vz =
+      _mm256_add_ps(lane.vz, _mm256_mul_ps(d, _mm256_mul_ps(_mm256_load_ps(b.nz), lane.pull)));
   lane.wx = _mm256_add_ps(lane.wx, _mm256_mul_ps(d, _mm256_load_ps(b.ix)));
   lane.wy = _mm256_add_ps(lane.wy, _mm256_mul_ps(d, _mm256_load_ps(b.iy)));
   lane.wz = _mm256_add_ps(lane.wz, _mm256_mul_ps(d, _mm256_load_ps(b.iz)));
 }
 }  // namespace
 
-bool SurfaceBatches::canSolveTogether() {
-  return kHasAvx;
-}
-
-// Each lane runs down its column, mostly on one slot for many batches in a row: the eight
-// bodies stay in registers and are written back (and the next eight read) only when some
-// lane moves to another slot.
-__attribute__((target("avx"))) void SurfaceBatches::solve(std::vector<SolverBody>& bodies,
-                                                          bool useBias) {
-  static_assert(offsetof(SolverBody, invMass) == 12 && offsetof(SolverBody, w) == 16);
-  if (!kHasAvx) {
-    solveFallback(bodies, useBias);
-    return;
-  }
-  if (batches_.empty()) return;
-  beginCopies(bodies);
-  float* p[kLanes];
-  for (int k = 0; k < kLanes; ++k) p[k] = laneBody(bodies, batches_[0].slot[k]);
-  EightBodies lane;
-  lane.load(p);
-  for (std::size_t i = 0; i < batches_.size(); ++i) {
-    Batch& b = batches_[i];
-    if (reload_[i]) {
-      lane.store(p);
-      for (int k = 0; k < kLanes; ++k) p[k] = laneBody(bodies, b.slot[k]);
-      lane.load(p);
-    }
-    solveBatch(b, lane, useBias);
-  }
-  lane.store(p);
-  endCopies(bodies);
-}
-
-// solveTogether's loop. Two sweeps' lanes take twelve vector registers: AVX's sixteen leave
-// too few for the rest, and the spills land on the velocity chains, so where the CPU has
-// AVX-512VL (thirty-two) the loop is compiled for that too (the same operations, so the same
-// bits; contraction into FMA is off in every build).
+// The sweeps of up to four worlds side by side. Each world's lanes take six vector registers:
+// four worlds need twenty-four, which AVX-512VL has (thirty-two; the loop is compiled for it
+// too: the same operations, so the same bits, and contraction into FMA is off in every
+// build). AVX's sixteen hold two worlds' lanes, though not without spills that land on the
+// velocity chains, so without AVX-512VL the worlds go two by two.
 struct SurfaceSweeps {
-  __attribute__((target("avx"), always_inline)) static inline void sideBySide(
-      SurfaceBatches& a, std::vector<SolverBody>& bodiesA, SurfaceBatches& b,
-      std::vector<SolverBody>& bodiesB, bool useBias) {
-    using Batch = SurfaceBatches::Batch;
-    constexpr int kLanes = SurfaceBatches::kLanes;
-    // The longer sweep first: once the shorter one ends, the longer goes on alone.
-    const bool swap = b.batches_.size() > a.batches_.size();
-    SurfaceBatches& longer = swap ? b : a;
-    SurfaceBatches& shorter = swap ? a : b;
-    std::vector<SolverBody>& bodiesL = swap ? bodiesB : bodiesA;
-    std::vector<SolverBody>& bodiesS = swap ? bodiesA : bodiesB;
-    longer.beginCopies(bodiesL);
-    shorter.beginCopies(bodiesS);
-    float* pl[kLanes];
-    float* ps[kLanes];
-    for (int k = 0; k < kLanes; ++k) {
-      pl[k] = longer.laneBody(bodiesL, longer.batches_[0].slot[k]);
-      ps[k] = shorter.laneBody(bodiesS, shorter.batches_[0].slot[k]);
+  using Batch = SurfaceBatches::Batch;
+  static constexpr int kLanes = SurfaceBatches::kLanes;
+
+  // Lanes `lanes` (a bit mask) of batch i take their bodies (p: where they are).
+  __attribute__((target("avx"), always_inline)) static inline void load(
+      SurfaceBatches& sweep, std::vector<SolverBody>& bodies, std::size_t i, unsigned lanes,
+      float* p[kLanes], EightBodies& lane) {
+    for (; lanes != 0; lanes &= lanes - 1) {
+      const int k = __builtin_ctz(lanes);
+      const int slot = sweep.lanes_[i].slot[k];
+      p[k] = sweep.laneBody(bodies, slot);
+      lane.loadLane(k, *reinterpret_cast<const SolverBody*>(p[k]),
+                    sweep.massScale_[static_cast<std::size_t>(slot)]);
     }
-    EightBodies laneL, laneS;
-    laneL.load(pl);
-    laneS.load(ps);
-    const std::size_t common = shorter.batches_.size();
-    for (std::size_t i = 0; i < common; ++i) {
-      Batch& bl = longer.batches_[i];
-      Batch& bs = shorter.batches_[i];
-      if (longer.reload_[i]) {
-        laneL.store(pl);
-        for (int k = 0; k < kLanes; ++k) pl[k] = longer.laneBody(bodiesL, bl.slot[k]);
-        laneL.load(pl);
-      }
-      if (shorter.reload_[i]) {
-        laneS.store(ps);
-        for (int k = 0; k < kLanes; ++k) ps[k] = shorter.laneBody(bodiesS, bs.slot[k]);
-        laneS.load(ps);
-      }
-      solveBatch(bl, laneL, useBias);
-      solveBatch(bs, laneS, useBias);
+  }
+
+  // Batches [from, to) of the first M sweeps (each has them). Each lane runs down its
+  // column, mostly on one slot for many batches in a row: its body stays in registers until
+  // the lane moves to another slot, and until `to`.
+  template <int M>
+  __attribute__((target("avx"), always_inline)) static inline void phase(
+      SurfaceBatches* const* sweeps, std::vector<SolverBody>* const* bodies, std::size_t from,
+      std::size_t to, bool useBias) {
+    constexpr unsigned kAll = (1u << kLanes) - 1;
+    float* p[M][kLanes];
+    EightBodies lane[M];
+#pragma GCC unroll 4
+    for (int w = 0; w < M; ++w) {
+      lane[w].vx = lane[w].vy = lane[w].vz = lane[w].wx = lane[w].wy = lane[w].wz = lane[w].pull =
+          _mm256_setzero_ps();
+      load(*sweeps[w], *bodies[w], from, kAll, p[w], lane[w]);
     }
-    laneS.store(ps);
-    shorter.endCopies(bodiesS);
-    for (std::size_t i = common; i < longer.batches_.size(); ++i) {
-      Batch& bl = longer.batches_[i];
-      if (longer.reload_[i]) {
-        laneL.store(pl);
-        for (int k = 0; k < kLanes; ++k) pl[k] = longer.laneBody(bodiesL, bl.slot[k]);
-        laneL.load(pl);
+    for (std::size_t i = from; i < to; ++i) {
+#pragma GCC unroll 4
+      for (int w = 0; w < M; ++w) {
+        const unsigned changed = sweeps[w]->changed_[i];
+        if (i == from || changed == 0) continue;
+        // Every leaving body is written back before any arriving one is read: a slot can
+        // leave one lane and enter another at the same batch.
+        lane[w].writeBack(changed, p[w]);
+        load(*sweeps[w], *bodies[w], i, changed, p[w], lane[w]);
       }
-      solveBatch(bl, laneL, useBias);
+#pragma GCC unroll 4
+      for (int w = 0; w < M; ++w) solveBatch(sweeps[w]->batches_[i], lane[w], useBias);
     }
-    laneL.store(pl);
-    longer.endCopies(bodiesL);
+#pragma GCC unroll 4
+    for (int w = 0; w < M; ++w) lane[w].writeBack(kAll, p[w]);
+  }
+
+  // Every batch of the given sweeps (at most four, none empty): all of them side by side
+  // while each has batches left, then the longer ones on.
+  __attribute__((target("avx"), always_inline)) static inline void run(
+      std::span<SurfaceBatches* const> given, std::span<std::vector<SolverBody>* const> givenBodies,
+      bool useBias) {
+    const std::size_t n = given.size();
+    SurfaceBatches* sweeps[4];
+    std::vector<SolverBody>* bodies[4];
+    for (std::size_t w = 0; w < n; ++w) {  // by decreasing batch count (insertion sort)
+      std::size_t j = w;
+      for (; j > 0 && sweeps[j - 1]->batches_.size() < given[w]->batches_.size(); --j) {
+        sweeps[j] = sweeps[j - 1];
+        bodies[j] = bodies[j - 1];
+      }
+      sweeps[j] = given[w];
+      bodies[j] = givenBodies[w];
+    }
+    for (std::size_t w = 0; w < n; ++w) sweeps[w]->beginCopies(*bodies[w]);
+    std::size_t from = 0;
+    for (std::size_t m = n; m > 0; --m) {  // the m longest sweeps still have batches
+      const std::size_t to = sweeps[m - 1]->batches_.size();
+      if (from < to) {
+        switch (m) {
+          case 4:
+            phase<4>(sweeps, bodies, from, to, useBias);
+            break;
+          case 3:
+            phase<3>(sweeps, bodies, from, to, useBias);
+            break;
+          case 2:
+            phase<2>(sweeps, bodies, from, to, useBias);
+            break;
+          default:
+            phase<1>(sweeps, bodies, from, to, useBias);
+            break;
+        }
+        from = to;
+      }
+    }
+    for (std::size_t w = 0; w < n; ++w) sweeps[w]->endCopies(*bodies[w]);
   }
 };
 
 namespace {
 const bool kHasAvx512vl = cpuHasAvx512vl();
 
-__attribute__((target("avx"))) void sideBySideAvx(SurfaceBatches& a,
-                                                  std::vector<SolverBody>& bodiesA,
-                                                  SurfaceBatches& b,
-                                                  std::vector<SolverBody>& bodiesB, bool useBias) {
-  SurfaceSweeps::sideBySide(a, bodiesA, b, bodiesB, useBias);
+__attribute__((target("avx"))) void runAvx(std::span<SurfaceBatches* const> sweeps,
+                                           std::span<std::vector<SolverBody>* const> bodies,
+                                           bool useBias) {
+  SurfaceSweeps::run(sweeps, bodies, useBias);
 }
 
-__attribute__((target("avx512f,avx512vl"))) void sideBySideAvx512(SurfaceBatches& a,
-                                                                  std::vector<SolverBody>& bodiesA,
-                                                                  SurfaceBatches& b,
-                                                                  std::vector<SolverBody>& bodiesB,
-                                                                  bool useBias) {
-  SurfaceSweeps::sideBySide(a, bodiesA, b, bodiesB, useBias);
+__attribute__((target("avx512f,avx512vl"))) void runAvx512(
+    std::span<SurfaceBatches* const> sweeps, std::span<std::vector<SolverBody>* const> bodies,
+    bool useBias) {
+  SurfaceSweeps::run(sweeps, bodies, useBias);
 }
+std::atomic<bool> vectorSweeps{true};  // World::useVectorSweeps
 }  // namespace
 
-void SurfaceBatches::solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA,
-                                   SurfaceBatches& b, std::vector<SolverBody>& bodiesB,
-                                   bool useBias) {
-  if (!kHasAvx || a.batches_.empty() || b.batches_.empty()) {
-    a.solve(bodiesA, useBias);
-    b.solve(bodiesB, useBias);
+bool SurfaceBatches::canSolveSideBySide() {
+  return kHasAvx && vectorSweeps.load(std::memory_order_relaxed);
+}
+
+bool SurfaceBatches::useVectorSweeps(bool enabled) {
+  vectorSweeps.store(enabled && kHasAvx);
+  return vectorSweeps.load();
+}
+
+void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
+  SurfaceBatches* const self[1] = {this};
+  std::vector<SolverBody>* const selfBodies[1] = {&bodies};
+  solveSideBySide(self, selfBodies, useBias);
+}
+
+void SurfaceBatches::solveSideBySide(std::span<SurfaceBatches* const> sweeps,
+                                     std::span<std::vector<SolverBody>* const> bodies,
+                                     bool useBias) {
+  static_assert(offsetof(SolverBody, invMass) == 12 && offsetof(SolverBody, w) == 16);
+  assert(sweeps.size() == bodies.size());
+  if (!canSolveSideBySide()) {
+    for (std::size_t w = 0; w < sweeps.size(); ++w) sweeps[w]->solveFallback(*bodies[w], useBias);
     return;
   }
-  if (kHasAvx512vl)
-    sideBySideAvx512(a, bodiesA, b, bodiesB, useBias);
-  else
-    sideBySideAvx(a, bodiesA, b, bodiesB, useBias);
+  // The sweeps with batches, `group` at a time.
+  const std::size_t group = kHasAvx512vl ? 4 : 2;
+  SurfaceBatches* chosen[4];
+  std::vector<SolverBody>* chosenBodies[4];
+  std::size_t count = 0;
+  auto flush = [&] {
+    if (count == 0) return;
+    if (kHasAvx512vl)
+      runAvx512({chosen, count}, {chosenBodies, count}, useBias);
+    else
+      runAvx({chosen, count}, {chosenBodies, count}, useBias);
+    count = 0;
+  };
+  for (std::size_t w = 0; w < sweeps.size(); ++w) {
+    if (sweeps[w]->batches_.empty()) continue;
+    chosen[count] = sweeps[w];
+    chosenBodies[count] = bodies[w];
+    if (++count == group) flush();
+  }
+  flush();
 }
 #else
-bool SurfaceBatches::canSolveTogether() {
+bool SurfaceBatches::canSolveSideBySide() {
+  return false;
+}
+
+bool SurfaceBatches::useVectorSweeps(bool) {
   return false;
 }
 
@@ -487,11 +516,10 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
   solveFallback(bodies, useBias);
 }
 
-void SurfaceBatches::solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA,
-                                   SurfaceBatches& b, std::vector<SolverBody>& bodiesB,
-                                   bool useBias) {
-  a.solve(bodiesA, useBias);
-  b.solve(bodiesB, useBias);
+void SurfaceBatches::solveSideBySide(std::span<SurfaceBatches* const> sweeps,
+                                     std::span<std::vector<SolverBody>* const> bodies,
+                                     bool useBias) {
+  for (std::size_t w = 0; w < sweeps.size(); ++w) sweeps[w]->solve(*bodies[w], useBias);
 }
 #endif
 

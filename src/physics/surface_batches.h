@@ -10,6 +10,7 @@
 // splitting, Tonge et al. 2012).
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include "dynahand/core.h"
@@ -34,29 +35,38 @@ class SurfaceBatches {
              int dummySlot);
   // One sweep over every row, with the position bias (solve) or the relax bias.
   void solve(std::vector<SolverBody>& bodies, bool useBias);
-  // a.solve(bodiesA, useBias) and b.solve(bodiesB, useBias) (of two different worlds) side by
-  // side, batch by batch: each lane does exactly what solve() does, so the same bits, but the
-  // two sweeps' latency chains overlap.
-  static void solveTogether(SurfaceBatches& a, std::vector<SolverBody>& bodiesA, SurfaceBatches& b,
-                            std::vector<SolverBody>& bodiesB, bool useBias);
-  // Whether solveTogether runs side by side here (the CPU has AVX); otherwise it solves one
-  // after the other.
-  static bool canSolveTogether();
+  // sweeps[i]->solve(*bodies[i], useBias) for each i (of different worlds), side by side,
+  // batch by batch, up to four at a time: each lane does exactly what solve() does, so the
+  // same bits, but the sweeps' latency chains overlap.
+  static void solveSideBySide(std::span<SurfaceBatches* const> sweeps,
+                              std::span<std::vector<SolverBody>* const> bodies, bool useBias);
+  // Whether solveSideBySide overlaps the sweeps here (the CPU has AVX and the vector sweeps
+  // are on); otherwise it solves one after the other.
+  static bool canSolveSideBySide();
+  // Switches the vector sweeps (World::useVectorSweeps); returns whether they are now on.
+  static bool useVectorSweeps(bool enabled);
   // The accumulated impulse of every row, in the order given to build().
   void writeImpulses(float* impulses) const;
   void reserve(int rows);
 
  private:
-  friend struct SurfaceSweeps;  // solveTogether's loop (surface_batches.cpp)
+  friend struct SurfaceSweeps;  // the sweeps' loops (surface_batches.cpp)
   static constexpr int kLanes = 8;
-  struct alignas(32) Batch {
+  // A batch: what the sweeps read, two fields to a cache line (relaxBias last: only the relax
+  // sweeps read it). The sweeps are bound by how fast these stream in from the second-level
+  // cache, so a batch holds nothing that can be formed on the way: the pull along the normal
+  // per unit impulse is normal x (the lane's inverse mass x massScale_), formed per batch with
+  // the same rounding as storing it would have had.
+  struct alignas(64) Batch {
+    float nx[kLanes], ny[kLanes], nz[kLanes], ax[kLanes], ay[kLanes], az[kLanes];
+    float ix[kLanes], iy[kLanes], iz[kLanes];  // the body's inverse inertia x ang
+    float effMass[kLanes], lower[kLanes], upper[kLanes], impulse[kLanes], bias[kLanes];
+    float relaxBias[kLanes];
+  };
+  // Where a batch's lanes point, read only when lanes change slot.
+  struct BatchLanes {
     int slot[kLanes];
     int row[kLanes];  // index in build()'s input; -1 for padding
-    float nx[kLanes], ny[kLanes], nz[kLanes], ax[kLanes], ay[kLanes], az[kLanes];
-    float ix[kLanes], iy[kLanes], iz[kLanes];
-    float ux[kLanes], uy[kLanes], uz[kLanes];  // normal * the body's inverse mass
-    float effMass[kLanes], bias[kLanes], relaxBias[kLanes], lower[kLanes], upper[kLanes];
-    float impulse[kLanes];
   };
   // A slot whose rows are spread over `copies` copies, solver slots `first`... of copies_.
   struct Split {
@@ -66,14 +76,14 @@ class SurfaceBatches {
   void beginCopies(const std::vector<SolverBody>& bodies);  // every copy = its slot
   void endCopies(std::vector<SolverBody>& bodies) const;    // each split slot = its copies' mean
 
-  void place(Batch& b, int lane, const PreparedSurfaceRow& r, int row,
-             const std::vector<SolverBody>& bodies);
+  void place(Batch& b, BatchLanes& lanes, int lane, const PreparedSurfaceRow& r, int row);
   void solveFallback(std::vector<SolverBody>& bodies, bool useBias);
 
   std::vector<Batch> batches_;
-  // (batches) whether some lane's slot differs from the batch before (the first: 0), when
-  // the sweep writes its lanes' bodies back and loads the next ones
-  std::vector<unsigned char> reload_;
+  std::vector<BatchLanes> lanes_;  // (batches)
+  // (batches) the lanes whose slot differs from the batch before (a bit mask; the first: 0),
+  // where the sweep writes those lanes' bodies back and loads the next ones
+  std::vector<unsigned char> changed_;
   std::vector<int> spread_;   // scratch: one slot's rows in dealing order
   std::vector<int> cellRow_;  // scratch: the row in each cell, counted down the columns
   std::vector<int> order_, count_, start_, slotsByCount_;
@@ -82,6 +92,9 @@ class SurfaceBatches {
   std::vector<int> splitOfSlot_;   // (slots) index into splits_, -1 when not split
   std::vector<int> rowsSeen_;      // (slots) scratch while dealing rows to copies
   std::vector<float> slotCopies_;  // (slots) copies a slot is split into (1: not split)
+  // (slots, then copies) the factor on a lane body's inverse mass: a copy holds 1/copies of
+  // its slot's mass; 1 for a slot
+  std::vector<float> massScale_;
   std::vector<SolverBody> copies_;
   int slotCount_ = 0;  // real solver slots; copies are numbered after them
   int dummySlot_ = 0;  // build()'s: the slot padding lanes point at

@@ -85,11 +85,11 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
   // Lanes by decreasing run length (ties in lane order), so that paired runs end together.
   for (std::size_t k = 0; k < lanes_.size(); ++k) {
     const int steps = lanes_[k]->strategy->steps(settings_.substeps);
-    auto at = pairOrder_.begin();
-    while (at != pairOrder_.end() &&
+    auto at = runOrder_.begin();
+    while (at != runOrder_.end() &&
            lanes_[static_cast<std::size_t>(*at)]->strategy->steps(settings_.substeps) >= steps)
       ++at;
-    pairOrder_.insert(at, static_cast<int>(k));
+    runOrder_.insert(at, static_cast<int>(k));
   }
   openAngles_ = model::zeroAngles(model);
   model::clampToLimits(model, openAngles_);
@@ -292,21 +292,22 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   if (pool_ != nullptr) {
     pool_->run(count, runLane);
   } else {
-    // Two lanes at a time (longest runs first, so that paired runs end together), their
-    // worlds stepped side by side: the same bits as one after the other, in less time.
-    const std::size_t n = pairOrder_.size();
+    // Up to four lanes at a time (longest runs first, so that runs side by side end
+    // together), their worlds stepped side by side: the same bits as one after the other,
+    // in less time.
+    const std::size_t n = runOrder_.size();
     for (std::size_t k = 0; k < n; ++k) {
-      Lane& lane = *lanes_[static_cast<std::size_t>(pairOrder_[k])];
+      Lane& lane = *lanes_[static_cast<std::size_t>(runOrder_[k])];
       startLane(lane);
       laneContexts_[k].emplace(contextOf(lane));
       laneStrategies_[k] = lane.strategy.get();
       laneContextPointers_[k] = &*laneContexts_[k];
     }
-    runStrategiesTwoAtATime(std::span(laneStrategies_.data(), n),
+    runStrategiesSideBySide(std::span(laneStrategies_.data(), n),
                             std::span(laneContextPointers_.data(), n),
                             std::span(laneRan_.data(), n));
     for (std::size_t k = 0; k < n; ++k) {
-      Lane& lane = *lanes_[static_cast<std::size_t>(pairOrder_[k])];
+      Lane& lane = *lanes_[static_cast<std::size_t>(runOrder_[k])];
       lane.candidate.ran = laneRan_[k];
       finishLane(lane);
       laneContexts_[k].reset();

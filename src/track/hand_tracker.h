@@ -92,8 +92,8 @@ class HandTracker {
   std::vector<Vec3> keptPoints_;
   std::vector<float> keptWeights_;
   std::vector<std::unique_ptr<Lane>> lanes_;
-  std::vector<int> pairOrder_;  // lanes by decreasing run length, run two at a time
-  // runStrategies' scratch, in pairOrder_ (no allocation per frame).
+  std::vector<int> runOrder_;  // lanes by decreasing run length (runStrategiesSideBySide)
+  // runStrategies' scratch, in runOrder_ (no allocation per frame).
   std::array<std::optional<StrategyContext>, kStrategyCount> laneContexts_;
   std::array<Strategy*, kStrategyCount> laneStrategies_{};
   std::array<StrategyContext*, kStrategyCount> laneContextPointers_{};

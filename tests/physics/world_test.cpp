@@ -270,61 +270,86 @@ TEST(Determinism, SurfaceRowsPreparedFourAtATimeGiveTheSameBytes) {
   EXPECT_GT(nonZero, wideImpulses.size() / 4);  // the rows did act
 }
 
-// Two worlds stepped together (their surface sweeps side by side) end every step with the same
-// bytes as when each is stepped alone: different row counts (one sweep runs out first), a weld
-// group in one of them, contacts and limits in both.
-TEST(Determinism, TwoWorldsSteppedTogetherGiveTheSameBytesAsAlone) {
+// Worlds stepped side by side (their sweeps interleaved) end every step with the same bytes
+// as when each is stepped alone, and as with the one-by-one surface sweep: four worlds with
+// different row counts (the shorter sweeps run out first), a weld group in one of them
+// (a slot split into copies), contacts and limits in all; side by side as four, as two pairs
+// (stepTogether), and as three and one.
+TEST(Determinism, WorldsSteppedSideBySideGiveTheSameBytesAsAlone) {
+  constexpr int kWorlds = 4;
   struct Run {
     std::vector<std::uint64_t> hashes;
     std::vector<float> impulses;
   };
   auto fill = [](World& w, int step, int which) {
     w.rows().clear();
-    const int count = which == 0 ? 300 + 7 * step : 120 + 3 * step;
-    scenes::addRandomSurfaceRows(w, count, static_cast<std::uint64_t>(1000 * which + step), 0.01f);
+    const int counts[kWorlds] = {300 + 7 * step, 120 + 3 * step, 450 - 5 * step, 40 + step};
+    scenes::addRandomSurfaceRows(w, counts[which], static_cast<std::uint64_t>(1000 * which + step),
+                                 0.01f);
     for (int b = 0; b < w.bodyCount(); ++b)
       w.addBoundary(b, Vec3(0.0f, -1.0f, 0.0f), -w.pose(1).p.y() - 0.01f, 0.01f, 0.03f);
     if (which == 1 && step == 10) w.weld(std::vector<BodyId>{0, 1, 2, 3, 4, 5, 6, 7, 8});
     if (which == 1 && step == 30) w.unweldAll();
   };
-  auto run = [&](bool together) {
-    scenes::HandLike a = scenes::makeHandLike(), b = scenes::makeHandLike();
-    a.world.reserveRows(1000);
-    b.world.reserveRows(1000);
-    Run out[2];
+  enum class Mode { Alone, AloneOneByOne, FourSideBySide, Pairs, ThreeAndOne };
+  auto run = [&](Mode mode) {
+    std::vector<scenes::HandLike> hands;
+    for (int k = 0; k < kWorlds; ++k) hands.push_back(scenes::makeHandLike());
+    std::array<World*, kWorlds> worlds;
+    for (int k = 0; k < kWorlds; ++k) {
+      worlds[static_cast<std::size_t>(k)] = &hands[static_cast<std::size_t>(k)].world;
+      worlds[static_cast<std::size_t>(k)]->reserveRows(1000);
+    }
+    const bool vector = World::useVectorSweeps(mode != Mode::AloneOneByOne);
+    std::array<Run, kWorlds> out;
     for (int step = 0; step < 45; ++step) {
-      fill(a.world, step, 0);
-      fill(b.world, step, 1);
-      if (together) {
-        World::stepTogether(a.world, b.world, kDt);
-      } else {
-        a.world.step(kDt);
-        b.world.step(kDt);
+      for (int k = 0; k < kWorlds; ++k) fill(*worlds[static_cast<std::size_t>(k)], step, k);
+      switch (mode) {
+        case Mode::Alone:
+        case Mode::AloneOneByOne:
+          for (World* w : worlds) w->step(kDt);
+          break;
+        case Mode::FourSideBySide:
+          World::stepSideBySide(worlds, kDt);
+          break;
+        case Mode::Pairs:
+          World::stepTogether(*worlds[0], *worlds[1], kDt);
+          World::stepTogether(*worlds[2], *worlds[3], kDt);
+          break;
+        case Mode::ThreeAndOne:
+          World::stepSideBySide(std::span(worlds).first(3), kDt);
+          World::stepSideBySide(std::span(worlds).subspan(3), kDt);
+          break;
       }
-      for (int k = 0; k < 2; ++k) {
-        World& w = k == 0 ? a.world : b.world;
-        out[k].hashes.push_back(w.stateHash());
-        out[k].impulses.insert(out[k].impulses.end(), w.rows().impulse.begin(),
-                               w.rows().impulse.end());
+      for (int k = 0; k < kWorlds; ++k) {
+        World& w = *worlds[static_cast<std::size_t>(k)];
+        Run& r = out[static_cast<std::size_t>(k)];
+        r.hashes.push_back(w.stateHash());
+        r.impulses.insert(r.impulses.end(), w.rows().impulse.begin(), w.rows().impulse.end());
       }
     }
-    return std::array<Run, 2>{out[0], out[1]};
+    World::useVectorSweeps(true);
+    return std::make_pair(out, vector);
   };
-  const auto alone = run(false);
-  const auto together = run(true);
-  for (int k = 0; k < 2; ++k) {
-    ASSERT_EQ(alone[k].hashes.size(), together[k].hashes.size());
-    for (std::size_t i = 0; i < alone[k].hashes.size(); ++i)
-      ASSERT_EQ(alone[k].hashes[i], together[k].hashes[i]) << "world " << k << " step " << i;
-    ASSERT_EQ(alone[k].impulses.size(), together[k].impulses.size());
-    for (std::size_t i = 0; i < alone[k].impulses.size(); ++i)
-      ASSERT_EQ(std::bit_cast<std::uint32_t>(alone[k].impulses[i]),
-                std::bit_cast<std::uint32_t>(together[k].impulses[i]))
-          << "world " << k << " row impulse " << i;
+  const auto [alone, vectorAlone] = run(Mode::Alone);
+  EXPECT_EQ(vectorAlone, World::useVectorSweeps(true));
+  for (Mode mode : {Mode::AloneOneByOne, Mode::FourSideBySide, Mode::Pairs, Mode::ThreeAndOne}) {
+    const auto [other, vector] = run(mode);
+    SCOPED_TRACE(testing::Message() << "mode " << static_cast<int>(mode) << " vector " << vector);
+    for (std::size_t k = 0; k < kWorlds; ++k) {
+      ASSERT_EQ(alone[k].hashes.size(), other[k].hashes.size());
+      for (std::size_t i = 0; i < alone[k].hashes.size(); ++i)
+        ASSERT_EQ(alone[k].hashes[i], other[k].hashes[i]) << "world " << k << " step " << i;
+      ASSERT_EQ(alone[k].impulses.size(), other[k].impulses.size());
+      for (std::size_t i = 0; i < alone[k].impulses.size(); ++i)
+        ASSERT_EQ(std::bit_cast<std::uint32_t>(alone[k].impulses[i]),
+                  std::bit_cast<std::uint32_t>(other[k].impulses[i]))
+            << "world " << k << " row impulse " << i;
+    }
   }
-  // The worlds moved (the comparison is not between two resting states).
-  EXPECT_NE(alone[0].hashes.front(), alone[0].hashes.back());
-  EXPECT_NE(alone[1].hashes.front(), alone[1].hashes.back());
+  // The worlds moved (the comparison is not between resting states).
+  for (std::size_t k = 0; k < kWorlds; ++k)
+    EXPECT_NE(alone[k].hashes.front(), alone[k].hashes.back()) << "world " << k;
 }
 
 TEST(Allocation, NoHeapAllocationPerStepAfterWarmUp) {

@@ -1,6 +1,7 @@
 // The normal, gross-motion and grasp-bias simulations.
 #include "track/strategies/strategy.h"
 
+#include <array>
 #include <cassert>
 #include <numeric>
 #include <span>
@@ -68,18 +69,18 @@ bool runStrategy(Strategy& strategy, StrategyContext& c) {
   Strategy* const one[1] = {&strategy};
   StrategyContext* const context[1] = {&c};
   bool ran[1] = {false};
-  runStrategiesTwoAtATime(one, context, ran);
+  runStrategiesSideBySide(one, context, ran);
   return ran[0];
 }
 
-void runStrategiesTwoAtATime(std::span<Strategy* const> strategies,
+void runStrategiesSideBySide(std::span<Strategy* const> strategies,
                              std::span<StrategyContext* const> contexts, std::span<bool> ran) {
   assert(strategies.size() == contexts.size() && ran.size() == strategies.size());
+  constexpr std::size_t kSlots = physics::World::kMaxSideBySide;
   std::size_t next = 0;  // the next strategy to start
-  int running[2] = {-1, -1};
-  int step[2] = {0, 0};
+  std::array<int, kSlots> running, step;
   // Slot k takes the next strategy with something to do (-1 when none is left).
-  auto startNext = [&](int k) {
+  auto startNext = [&](std::size_t k) {
     running[k] = -1;
     while (next < strategies.size()) {
       const std::size_t i = next++;
@@ -91,11 +92,14 @@ void runStrategiesTwoAtATime(std::span<Strategy* const> strategies,
       }
     }
   };
-  startNext(0);
-  startNext(1);
-  while (running[0] >= 0 || running[1] >= 0) {
-    StrategyContext* stepping[2] = {nullptr, nullptr};
-    for (int k = 0; k < 2; ++k) {
+  for (std::size_t k = 0; k < kSlots; ++k) startNext(k);
+  std::array<physics::World*, kSlots> worlds;
+  for (;;) {
+    // The worlds with a step to take now; those whose step length differs from the first's
+    // step on their own.
+    std::size_t count = 0;
+    float dt = 0.0f;
+    for (std::size_t k = 0; k < kSlots; ++k) {
       while (running[k] >= 0) {
         StrategyContext& c = *contexts[static_cast<std::size_t>(running[k])];
         const FrameInput* input =
@@ -103,20 +107,20 @@ void runStrategiesTwoAtATime(std::span<Strategy* const> strategies,
         if (input != nullptr) {
           ++step[k];
           c.simulator.prepareStep(c.rig, *input);
-          stepping[k] = &c;
+          const float h = c.simulator.settings().stepDt;
+          if (count == 0) dt = h;
+          if (h == dt) {
+            worlds[count++] = &c.rig.world();
+          } else {
+            c.rig.world().step(h);
+          }
           break;
         }
         startNext(k);  // this run is over
       }
     }
-    if (stepping[0] != nullptr && stepping[1] != nullptr &&
-        stepping[0]->simulator.settings().stepDt == stepping[1]->simulator.settings().stepDt) {
-      physics::World::stepTogether(stepping[0]->rig.world(), stepping[1]->rig.world(),
-                                   stepping[0]->simulator.settings().stepDt);
-      continue;
-    }
-    for (StrategyContext* c : stepping)
-      if (c != nullptr) c->rig.world().step(c->simulator.settings().stepDt);
+    if (count == 0) break;
+    physics::World::stepSideBySide(std::span(worlds.data(), count), dt);
   }
 }
 

@@ -47,11 +47,12 @@ std::unique_ptr<Strategy> makeStrategy(StrategyKind kind);
 // Runs a strategy: begin(), then each step (Simulator::prepareStep, World::step) until
 // beforeStep() ends the run. false when begin() was.
 bool runStrategy(Strategy& strategy, StrategyContext& context);
-// Runs strategies, each on its own rig and simulator, two at a time, step by step: while two
-// runs have a step, their worlds step together (physics::World::stepTogether); when a run
-// ends, the next strategy in order takes its place. The same bits as running them one after
-// the other. ran[i]: what strategy i's begin() returned.
-void runStrategiesTwoAtATime(std::span<Strategy* const> strategies,
+// Runs strategies, each on its own rig and simulator, up to physics::World::kMaxSideBySide at
+// a time, step by step: the runs that have a step take it together
+// (physics::World::stepSideBySide); when a run ends, the next strategy in order takes its
+// place. The same bits as running them one after the other. ran[i]: what strategy i's begin()
+// returned.
+void runStrategiesSideBySide(std::span<Strategy* const> strategies,
                              std::span<StrategyContext* const> contexts, std::span<bool> ran);
 
 }  // namespace dynahand::track

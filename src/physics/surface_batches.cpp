@@ -29,29 +29,94 @@ void SurfaceBatches::reserve(int rows) {
   order_.reserve(n);
 }
 
-inline void SurfaceBatches::place(Batch& b, BatchLanes& lanes, int k, const PreparedSurfaceRow& r,
-                                  int row) {
-  lanes.slot[k] = virtualSlot_[static_cast<std::size_t>(row)];
-  lanes.row[k] = row;
-  b.nx[k] = r.normal.x();
-  b.ny[k] = r.normal.y();
-  b.nz[k] = r.normal.z();
-  b.ax[k] = r.ang.x();
-  b.ay[k] = r.ang.y();
-  b.az[k] = r.ang.z();
-  // A copy holds 1/copies of its slot's mass: inverse inertia times copies (exactly the
-  // slot's own values for an unsplit slot, copies = 1); the inverse mass, in massScale_.
-  const float copies = slotCopies_[static_cast<std::size_t>(r.slot)];
-  b.ix[k] = r.invIAng.x() * copies;
-  b.iy[k] = r.invIAng.y() * copies;
-  b.iz[k] = r.invIAng.z() * copies;
-  b.effMass[k] = r.effMass / copies;
-  b.bias[k] = r.bias;
-  b.relaxBias[k] = r.relaxBias;
-  b.lower[k] = r.lower;
-  b.upper[k] = r.upper;
-  b.impulse[k] = 0.0f;
+namespace {
+#if defined(DYNAHAND_SWEEP_AVX)
+const bool kHasAvx = cpuHasAvx();
+#else
+constexpr bool kHasAvx = false;
+#endif
+
+// A batch's fields from its eight rows (padding lanes: an all-zero row) and the lanes'
+// copies (1 for an unsplit slot): a copy holds 1/copies of its slot's mass, so inverse
+// inertia times copies and effective mass over copies (exactly the row's own values for
+// copies = 1); the inverse mass is applied in the sweep (massScale_). A template only so that
+// it need not name the private batch type.
+template <class Batch>
+void fillBatch(Batch& b, const PreparedSurfaceRow* const* rows, const float* copies) {
+  for (int k = 0; k < 8; ++k) {
+    const PreparedSurfaceRow& r = *rows[k];
+    b.nx[k] = r.normal.x();
+    b.ny[k] = r.normal.y();
+    b.nz[k] = r.normal.z();
+    b.ax[k] = r.ang.x();
+    b.ay[k] = r.ang.y();
+    b.az[k] = r.ang.z();
+    b.ix[k] = r.invIAng.x() * copies[k];
+    b.iy[k] = r.invIAng.y() * copies[k];
+    b.iz[k] = r.invIAng.z() * copies[k];
+    b.effMass[k] = r.effMass / copies[k];
+    b.bias[k] = r.bias;
+    b.relaxBias[k] = r.relaxBias;
+    b.lower[k] = r.lower;
+    b.upper[k] = r.upper;
+    b.impulse[k] = 0.0f;
+  }
 }
+
+#if defined(DYNAHAND_SWEEP_AVX)
+// r[k] = eight floats of row k -> r[f] = float f of the eight rows.
+__attribute__((target("avx"), always_inline)) inline void transpose8(__m256 (&r)[8]) {
+  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+  const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
+  const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
+  const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+  const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+  const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+  const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+  r[0] = _mm256_permute2f128_ps(s0, s4, 0x20);
+  r[1] = _mm256_permute2f128_ps(s1, s5, 0x20);
+  r[2] = _mm256_permute2f128_ps(s2, s6, 0x20);
+  r[3] = _mm256_permute2f128_ps(s3, s7, 0x20);
+  r[4] = _mm256_permute2f128_ps(s0, s4, 0x31);
+  r[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
+  r[6] = _mm256_permute2f128_ps(s2, s6, 0x31);
+  r[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
+}
+
+// fillBatch with two 8x8 transposes: a row's fourteen floats (normal ... upper, bytes 4-60)
+// are read as floats 0-7 and 6-13. The same operations per value, so the same bits.
+template <class Batch>
+__attribute__((target("avx"))) void fillBatchAvx(Batch& b, const PreparedSurfaceRow* const* rows,
+                                                 const float* copies) {
+  static_assert(sizeof(PreparedSurfaceRow) == 60, "slot, then fourteen floats");
+  __m256 first[8], second[8];
+  for (int k = 0; k < 8; ++k) {
+    const float* f = reinterpret_cast<const float*>(rows[k]) + 1;
+    first[k] = _mm256_loadu_ps(f);
+    second[k] = _mm256_loadu_ps(f + 6);
+  }
+  transpose8(first);
+  transpose8(second);
+  const __m256 c = _mm256_loadu_ps(copies);
+  _mm256_store_ps(b.nx, first[0]);
+  _mm256_store_ps(b.ny, first[1]);
+  _mm256_store_ps(b.nz, first[2]);
+  _mm256_store_ps(b.ax, first[3]);
+  _mm256_store_ps(b.ay, first[4]);
+  _mm256_store_ps(b.az, first[5]);
+  _mm256_store_ps(b.ix, _mm256_mul_ps(second[0], c));
+  _mm256_store_ps(b.iy, _mm256_mul_ps(second[1], c));
+  _mm256_store_ps(b.iz, _mm256_mul_ps(second[2], c));
+  _mm256_store_ps(b.effMass, _mm256_div_ps(second[3], c));
+  _mm256_store_ps(b.bias, second[4]);
+  _mm256_store_ps(b.relaxBias, second[5]);
+  _mm256_store_ps(b.lower, second[6]);
+  _mm256_store_ps(b.upper, second[7]);
+  _mm256_store_ps(b.impulse, _mm256_setzero_ps());
+}
+#endif
+}  // namespace
 
 void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
                            const std::vector<SolverBody>& bodies, int dummySlot) {
@@ -185,22 +250,26 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   }
   // Filled batch after batch (row after row would write each batch's eight cache lines
   // once per row). Cells left over are padding on the dummy slot, all zero: they never act.
+  static const PreparedSurfaceRow kPaddingRow{};
+  const PreparedSurfaceRow* source[kLanes];
+  alignas(32) float copies[kLanes];
   for (int column = 0; column < batchCount; ++column) {
-    Batch& b = batches_[static_cast<std::size_t>(column)];
     BatchLanes& l = lanes_[static_cast<std::size_t>(column)];
     for (int lane = 0; lane < kLanes; ++lane) {
       const int i = cellRow_[static_cast<std::size_t>(lane * batchCount + column)];
-      if (i >= 0) {
-        place(b, l, lane, rows[static_cast<std::size_t>(i)], i);
-        continue;
-      }
-      l.slot[lane] = dummySlot;
-      l.row[lane] = -1;
-      b.nx[lane] = b.ny[lane] = b.nz[lane] = b.ax[lane] = b.ay[lane] = b.az[lane] = 0.0f;
-      b.ix[lane] = b.iy[lane] = b.iz[lane] = 0.0f;
-      b.effMass[lane] = b.bias[lane] = b.relaxBias[lane] = b.lower[lane] = b.upper[lane] = 0.0f;
-      b.impulse[lane] = 0.0f;
+      const PreparedSurfaceRow* r = i >= 0 ? &rows[static_cast<std::size_t>(i)] : &kPaddingRow;
+      l.slot[lane] = i >= 0 ? virtualSlot_[static_cast<std::size_t>(i)] : dummySlot;
+      l.row[lane] = i;
+      source[lane] = r;
+      copies[lane] = i >= 0 ? slotCopies_[static_cast<std::size_t>(r->slot)] : 1.0f;
     }
+#if defined(DYNAHAND_SWEEP_AVX)
+    if (canSolveSideBySide()) {  // the vector path, or (for tests) neither
+      fillBatchAvx(batches_[static_cast<std::size_t>(column)], source, copies);
+      continue;
+    }
+#endif
+    fillBatch(batches_[static_cast<std::size_t>(column)], source, copies);
   }
   changed_.assign(static_cast<std::size_t>(batchCount), 0);
   for (std::size_t i = 1; i < batches_.size(); ++i)
@@ -265,7 +334,6 @@ void SurfaceBatches::solveFallback(std::vector<SolverBody>& bodies, bool useBias
 
 #if defined(DYNAHAND_SWEEP_AVX)
 namespace {
-const bool kHasAvx = cpuHasAvx();
 
 // The bodies of a sweep's eight lanes, their velocities in registers. A lane changes body
 // only where its column moves to the next slot (about one lane every sixth batch, rarely

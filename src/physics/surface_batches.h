@@ -76,7 +76,6 @@ class SurfaceBatches {
   void beginCopies(const std::vector<SolverBody>& bodies);  // every copy = its slot
   void endCopies(std::vector<SolverBody>& bodies) const;    // each split slot = its copies' mean
 
-  void place(Batch& b, BatchLanes& lanes, int lane, const PreparedSurfaceRow& r, int row);
   void solveFallback(std::vector<SolverBody>& bodies, bool useBias);
 
   std::vector<Batch> batches_;

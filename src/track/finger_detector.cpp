@@ -1,22 +1,130 @@
 #include "track/finger_detector.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 
 namespace dynahand::track {
 
 namespace {
+constexpr float kExactRounding = 4194304.0f;  // 2^22: below it roundToPixel is exact inline
+
 // std::lround for pixel coordinates (|x| < 2^22), inline: truncation and the fraction are
 // exact there, so halves round away from zero exactly as lround does.
 int roundToPixel(float x) {
-  if (!(std::abs(x) < 4194304.0f)) return static_cast<int>(std::lround(x));
+  if (!(std::abs(x) < kExactRounding)) return static_cast<int>(std::lround(x));
   int i = static_cast<int>(x);
   const float fraction = x - static_cast<float>(i);
   if (fraction >= 0.5f) ++i;
   if (fraction <= -0.5f) --i;
   return i;
 }
+
+// The samples of one scanline: sample col (t = tMin + col across, from rowBase = c + axis s)
+// is on when its pixel (c + axis s + across t, rounded) is in the box and on the mask. Bit
+// col % 64 of on[col / 64]; the words must hold `columns` bits.
+struct ScanlineSampler {
+  const std::uint8_t* mask;
+  int width;
+  PixelBox box;
+
+  bool sample(const Vec2& rowBase, const Vec2& across, float t) const {
+    const Vec2 p = rowBase + across * t;
+    const int u = roundToPixel(p.x()), v = roundToPixel(p.y());
+    if (!box.contains(u, v)) return false;
+    return mask[static_cast<std::size_t>(v * width + u)] != 0;
+  }
+
+  void row(const Vec2& rowBase, const Vec2& across, float tMin, int columns,
+           std::uint64_t* on) const {
+    for (int w = 0; w < (columns + 63) / 64; ++w) on[w] = 0;
+    for (int col = 0; col < columns; ++col)
+      if (sample(rowBase, across, tMin + static_cast<float>(col)))
+        on[col / 64] |= std::uint64_t{1} << (col % 64);
+  }
+
+#if defined(__x86_64__) && defined(__GNUC__)
+  // roundToPixel of eight coordinates, all below 2^22 in magnitude.
+  __attribute__((target("avx2"), always_inline)) static inline __m256i roundToPixels(__m256 x) {
+    const __m256i i = _mm256_cvttps_epi32(x);
+    const __m256 fraction = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
+    // The compares give -1 where true: minus for >= 0.5, plus for <= -0.5.
+    const __m256i up =
+        _mm256_castps_si256(_mm256_cmp_ps(fraction, _mm256_set1_ps(0.5f), _CMP_GE_OQ));
+    const __m256i down =
+        _mm256_castps_si256(_mm256_cmp_ps(fraction, _mm256_set1_ps(-0.5f), _CMP_LE_OQ));
+    return _mm256_add_epi32(_mm256_sub_epi32(i, up), down);
+  }
+
+  // row() eight samples at a time: the same sums and products per sample, truncation and
+  // the fraction's test for the rounding, so the same pixels.
+  __attribute__((target("avx2"))) void rowAvx2(const Vec2& rowBase, const Vec2& across, float tMin,
+                                               int columns, std::uint64_t* on) const {
+    for (int w = 0; w < (columns + 63) / 64; ++w) on[w] = 0;
+    const __m256 baseX = _mm256_set1_ps(rowBase.x()), baseY = _mm256_set1_ps(rowBase.y());
+    const __m256 acrossX = _mm256_set1_ps(across.x()), acrossY = _mm256_set1_ps(across.y());
+    const __m256 first = _mm256_set1_ps(tMin);
+    const __m256 limit = _mm256_set1_ps(kExactRounding);
+    const __m256 absMask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const __m256i x0 = _mm256_set1_epi32(box.x0 - 1), x1 = _mm256_set1_epi32(box.x1);
+    const __m256i y0 = _mm256_set1_epi32(box.y0 - 1), y1 = _mm256_set1_epi32(box.y1);
+    const __m256i stride = _mm256_set1_epi32(width);
+    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    for (int col = 0; col < columns; col += 8) {
+      const __m256i index = _mm256_add_epi32(_mm256_set1_epi32(col), lanes);
+      const __m256 t = _mm256_add_ps(first, _mm256_cvtepi32_ps(index));
+      const __m256 px = _mm256_add_ps(baseX, _mm256_mul_ps(acrossX, t));
+      const __m256 py = _mm256_add_ps(baseY, _mm256_mul_ps(acrossY, t));
+      const __m256 small =
+          _mm256_and_ps(_mm256_cmp_ps(_mm256_and_ps(px, absMask), limit, _CMP_LT_OQ),
+                        _mm256_cmp_ps(_mm256_and_ps(py, absMask), limit, _CMP_LT_OQ));
+      const int count = std::min(8, columns - col);
+      if (_mm256_movemask_ps(small) != 0xFF) {  // far outside any image: one by one
+        for (int k = 0; k < count; ++k)
+          if (sample(rowBase, across, tMin + static_cast<float>(col + k)))
+            on[(col + k) / 64] |= std::uint64_t{1} << ((col + k) % 64);
+        continue;
+      }
+      const __m256i u = roundToPixels(px), v = roundToPixels(py);
+      const __m256i inside =
+          _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(u, x0), _mm256_cmpgt_epi32(x1, u)),
+                           _mm256_and_si256(_mm256_cmpgt_epi32(v, y0), _mm256_cmpgt_epi32(y1, v)));
+      // Outside the box: pixel 0 (read, then ignored).
+      const __m256i pixel =
+          _mm256_and_si256(inside, _mm256_add_epi32(_mm256_mullo_epi32(v, stride), u));
+      alignas(32) int at[8];
+      _mm256_store_si256(reinterpret_cast<__m256i*>(at), pixel);
+      unsigned bits = 0;
+      for (int k = 0; k < 8; ++k)
+        bits |= static_cast<unsigned>(mask[static_cast<std::size_t>(at[k])] != 0) << k;
+      bits &= static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(inside)));
+      bits &= (1u << count) - 1;
+      on[col / 64] |= static_cast<std::uint64_t>(bits) << (col % 64);
+    }
+  }
+#endif
+};
+
+#if defined(__x86_64__) && defined(__GNUC__)
+std::atomic<bool> vectorSampling{__builtin_cpu_supports("avx2") != 0};
+#else
+std::atomic<bool> vectorSampling{false};
+#endif
 }  // namespace
+
+bool FingerDetector::useVectorSampling(bool enabled) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  __builtin_cpu_init();
+  vectorSampling.store(enabled && __builtin_cpu_supports("avx2") != 0);
+#else
+  (void)enabled;
+#endif
+  return vectorSampling.load();
+}
 
 const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
   result_.fired = false;
@@ -87,25 +195,28 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
   const int rows = std::max(1, static_cast<int>(settings_.maxScanLengthM * pxPerM));
   const int columns = static_cast<int>(tMax - tMin) + 1;
 
-  // Whether the sample at t across the scanline through rowBase = c + axis s is on the mask
-  // (c + axis s + across t, the same sums as one expression).
-  auto masked = [&](const Vec2& rowBase, float t) {
-    const Vec2 p = rowBase + across * t;
-    const int u = roundToPixel(p.x()), v = roundToPixel(p.y());
-    if (!box.contains(u, v)) return false;
-    return cloud.mask[static_cast<std::size_t>(v * width + u)] != 0;
-  };
+  // A sample t across the scanline through rowBase = c + axis s is on when its pixel
+  // (c + axis s + across t, the same sums as one expression) is on the mask.
+  const ScanlineSampler sampler{cloud.mask.data(), width, box};
+  const bool vector = vectorSampling.load(std::memory_order_relaxed);
+  rowSamples_.resize(static_cast<std::size_t>(columns + 63) / 64);
+  std::uint64_t* const on = rowSamples_.data();
 
   segments_.clear();
   previousRuns_.clear();
   for (int row = 0; row < rows; ++row) {
     const float s = sMax - static_cast<float>(row);
     const Vec2 rowBase = c + axis * s;
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (vector)
+      sampler.rowAvx2(rowBase, across, tMin, columns, on);
+    else
+#endif
+      sampler.row(rowBase, across, tMin, columns, on);
     runs_.clear();
     int begin = -1, gap = 0;
     for (int col = 0; col <= columns; ++col) {
-      const bool on = col < columns && masked(rowBase, tMin + static_cast<float>(col));
-      if (on) {
+      if (col < columns && ((on[col / 64] >> (col % 64)) & 1u) != 0) {
         if (begin < 0) begin = col;
         gap = 0;
       } else if (begin >= 0 && ++gap > 1) {  // a 1-sample gap does not split a run

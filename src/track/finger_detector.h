@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "dynahand/cloud.h"
@@ -35,6 +36,10 @@ class FingerDetector {
   explicit FingerDetector(const FingerDetectorSettings& settings = {}) : settings_(settings) {}
   // Looks for an open hand in the cloud's segmentation mask.
   const FingerDetection& detect(const CloudFrame& cloud);
+  // Scanlines are sampled eight samples per AVX2 instruction where the CPU has AVX2 (on by
+  // default), else one by one; both give the same detections. false forces the one-by-one
+  // path (for tests comparing the two); returns whether the vector path is now in use.
+  static bool useVectorSampling(bool enabled);
 
  private:
   struct Run {
@@ -59,6 +64,7 @@ class FingerDetector {
   // frame: a projection of the pixels on a direction is monotonic along a row, so its extremes
   // over the mask are at those two pixels, for every scan direction.
   std::vector<int> rowFirst_, rowLast_;
+  std::vector<std::uint64_t> rowSamples_;  // one scanline's samples, bit per column: on mask
 };
 
 }  // namespace dynahand::track

@@ -35,12 +35,13 @@ model::JointAngles fistAngles(const model::ArticulatedModel& m) {
 struct Detected {
   bool fired = false;
   float worstTipErrorM = 1.0f;
+  FingerDetection detection;
 };
 
-Detected detectAt(model::JointAngles angles, float turnDeg) {
+Detected detectAt(model::JointAngles angles, float turnDeg, float distanceM = 0.40f) {
   const auto hand = model::makeDefaultHand();
   test::SyntheticCamera camera("tof");
-  const Pose upright = test::facingCamera(hand, Vec3(0.0f, 0.0f, 0.40f));
+  const Pose upright = test::facingCamera(hand, Vec3(0.0f, 0.0f, distanceM));
   const Quat turn(Eigen::AngleAxisf(turnDeg * kDeg, Vec3::UnitZ()));
   angles.root = Pose{turn * upright.p, turn * upright.q};
   const model::ModelPose pose = model::forwardKinematics(hand, angles);
@@ -56,6 +57,7 @@ Detected detectAt(model::JointAngles angles, float turnDeg) {
   const FingerDetection& d = detector.detect(cloud);
   Detected out;
   out.fired = d.fired;
+  out.detection = d;
   if (d.fired) {
     const auto k = model::keypoints21(hand, pose);
     out.worstTipErrorM = 0.0f;
@@ -74,6 +76,40 @@ TEST(FingerDetector, FindsTheFiveFingertipsOfASpreadHandAtAnyTurn) {
     // The tip sample sits a little inside the finger and on its front surface.
     EXPECT_LT(d.worstTipErrorM, 0.018f) << "turned " << turn << " degrees";
   }
+}
+
+// The scanlines sampled eight at a time (AVX2) and one by one give the same detections, bit
+// for bit: hands spread and in a fist, turned, near and far.
+TEST(FingerDetector, VectorSamplingDetectsLikeOneByOne) {
+  const auto hand = model::makeDefaultHand();
+  if (!FingerDetector::useVectorSampling(true)) GTEST_SKIP() << "no AVX2 on this CPU";
+  int fired = 0, compared = 0;
+  for (const bool spread : {true, false}) {
+    for (const float turn : {0.0f, 25.0f, -45.0f, 70.0f, 180.0f}) {
+      for (const float distance : {0.3f, 0.45f}) {
+        const model::JointAngles angles = spread ? spreadAngles(hand) : fistAngles(hand);
+        FingerDetector::useVectorSampling(false);
+        const Detected one = detectAt(angles, turn, distance);
+        FingerDetector::useVectorSampling(true);
+        const Detected eight = detectAt(angles, turn, distance);
+        SCOPED_TRACE(testing::Message()
+                     << "spread " << spread << " turn " << turn << " at " << distance);
+        ASSERT_EQ(one.fired, eight.fired);
+        ++compared;
+        if (!one.fired) continue;
+        ++fired;
+        for (std::size_t f = 0; f < 5; ++f) {
+          for (int c = 0; c < 3; ++c)
+            EXPECT_EQ(one.detection.tips[f][c], eight.detection.tips[f][c]) << "tip " << f;
+          for (int c = 0; c < 2; ++c)
+            EXPECT_EQ(one.detection.tipPixels[f][c], eight.detection.tipPixels[f][c])
+                << "tip " << f;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(compared, 20);
+  EXPECT_GE(fired, 4);  // spread hands are found (the comparison is not all "not fired")
 }
 
 TEST(FingerDetector, StaysQuietOnAFist) {

@@ -126,6 +126,41 @@ bool FingerDetector::useVectorSampling(bool enabled) {
   return vectorSampling.load();
 }
 
+// Word by word: single-sample gaps (an off sample with on samples either side) are filled
+// first, then each run is a block of ones.
+void scanlineRuns(const std::uint64_t* on, int columns, std::vector<ScanlineRun>& runs) {
+  runs.clear();
+  const int words = (columns + 63) / 64;
+  auto word = [&](int w) { return w >= 0 && w < words ? on[w] : std::uint64_t{0}; };
+  auto filledWord = [&](int w) {  // on, plus the gaps with on samples either side
+    const std::uint64_t b = word(w);
+    const std::uint64_t before = (b << 1) | (word(w - 1) >> 63);  // bit j: sample j - 1
+    const std::uint64_t after = (b >> 1) | (word(w + 1) << 63);   // bit j: sample j + 1
+    return b | (before & after);
+  };
+  int begin = -1;
+  std::uint64_t previous = 0;  // filled word w - 1
+  std::uint64_t current = words > 0 ? filledWord(0) : 0;
+  for (int w = 0; w < words; ++w) {
+    const std::uint64_t next = w + 1 < words ? filledWord(w + 1) : 0;
+    const std::uint64_t starts = current & ~((current << 1) | (previous >> 63));
+    const std::uint64_t ends = current & ~((current >> 1) | (next << 63));  // last on sample
+    std::uint64_t edges = starts | ends;
+    while (edges != 0) {
+      const int bit = __builtin_ctzll(edges);
+      edges &= edges - 1;
+      const int col = 64 * w + bit;
+      if ((starts >> bit) & 1u) begin = col;
+      if ((ends >> bit) & 1u) {
+        if (col + 1 < columns) runs.push_back({begin, col + 1});
+        begin = -1;
+      }
+    }
+    previous = current;
+    current = next;
+  }
+}
+
 const FingerDetection& FingerDetector::detect(const CloudFrame& cloud) {
   result_.fired = false;
   if (!cloud.segment.found || cloud.segmentBox.empty()) return result_;
@@ -213,18 +248,7 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
     else
 #endif
       sampler.row(rowBase, across, tMin, columns, on);
-    runs_.clear();
-    int begin = -1, gap = 0;
-    for (int col = 0; col <= columns; ++col) {
-      if (col < columns && ((on[col / 64] >> (col % 64)) & 1u) != 0) {
-        if (begin < 0) begin = col;
-        gap = 0;
-      } else if (begin >= 0 && ++gap > 1) {  // a 1-sample gap does not split a run
-        runs_.push_back({begin, col - gap + 1, -1});
-        begin = -1;
-        gap = 0;
-      }
-    }
+    scanlineRuns(on, columns, runs_);
     // Continue segments: a run overlapping previous runs joins the first one's segment;
     // overlapping several means they came together.
     for (Run& run : runs_) {

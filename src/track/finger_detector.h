@@ -31,6 +31,17 @@ struct FingerDetection {
   Vec2 thumbSideImage = Vec2(1, 0);  // unit, across the hand toward the thumb
 };
 
+// A run of on-mask samples along one scanline: columns [begin, end).
+struct ScanlineRun {
+  int begin, end;
+  int segment = -1;  // FingerDetector's: the segment it continues
+};
+// The runs of one scanline's samples (sample col on the mask: bit col % 64 of on[col / 64];
+// `columns` samples, the bits beyond them zero), into `runs`: a one-sample gap does not
+// split a run, and a run still open at the last sample is left out (it may go on past the
+// mask's extent).
+void scanlineRuns(const std::uint64_t* on, int columns, std::vector<ScanlineRun>& runs);
+
 class FingerDetector {
  public:
   explicit FingerDetector(const FingerDetectorSettings& settings = {}) : settings_(settings) {}
@@ -42,10 +53,7 @@ class FingerDetector {
   static bool useVectorSampling(bool enabled);
 
  private:
-  struct Run {
-    int begin, end;  // sample columns, half-open
-    int segment;
-  };
+  using Run = ScanlineRun;
   struct Segment {
     int topRow;
     float topColumn;

@@ -2,7 +2,11 @@
 // the image plane, with each fingertip where the finger ends; stays quiet on a fist.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <numbers>
+#include <random>
+#include <utility>
+#include <vector>
 
 #include "dynahand/cloud.h"
 #include "dynahand/model.h"
@@ -110,6 +114,44 @@ TEST(FingerDetector, VectorSamplingDetectsLikeOneByOne) {
   }
   EXPECT_EQ(compared, 20);
   EXPECT_GE(fired, 4);  // spread hands are found (the comparison is not all "not fired")
+}
+
+// scanlineRuns against the sample-by-sample rule it implements, on random scanlines of 1 to
+// 200 samples (several 64-bit words), sparse and dense.
+TEST(FingerDetector, ScanlineRunsFollowTheSampleBySampleRule) {
+  std::mt19937 rng(7);
+  std::vector<ScanlineRun> runs;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int columns = 1 + static_cast<int>(rng() % 200);
+    const float density = static_cast<float>(rng() % 100) / 100.0f;
+    std::vector<bool> sample(static_cast<std::size_t>(columns));
+    std::vector<std::uint64_t> on(static_cast<std::size_t>(columns + 63) / 64, 0);
+    for (int c = 0; c < columns; ++c) {
+      sample[static_cast<std::size_t>(c)] = static_cast<float>(rng() % 1000) < 1000 * density;
+      if (sample[static_cast<std::size_t>(c)])
+        on[static_cast<std::size_t>(c / 64)] |= std::uint64_t{1} << (c % 64);
+    }
+    // The rule: a run ends at the second off sample after it; one still open at the end
+    // (including one whose gap the end cuts short) is left out.
+    std::vector<std::pair<int, int>> expected;
+    int begin = -1, gap = 0;
+    for (int col = 0; col <= columns; ++col) {
+      if (col < columns && sample[static_cast<std::size_t>(col)]) {
+        if (begin < 0) begin = col;
+        gap = 0;
+      } else if (begin >= 0 && ++gap > 1) {
+        expected.emplace_back(begin, col - gap + 1);
+        begin = -1;
+        gap = 0;
+      }
+    }
+    scanlineRuns(on.data(), columns, runs);
+    ASSERT_EQ(runs.size(), expected.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      ASSERT_EQ(runs[i].begin, expected[i].first) << "trial " << trial << " run " << i;
+      ASSERT_EQ(runs[i].end, expected[i].second) << "trial " << trial << " run " << i;
+    }
+  }
 }
 
 TEST(FingerDetector, StaysQuietOnAFist) {

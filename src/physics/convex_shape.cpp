@@ -425,9 +425,44 @@ int ConvexShape::closestFace(const Vec3& p) const {
 }
 
 Vec3 ConvexShape::support(const Vec3& direction) const {
-  std::size_t best = 0;
+  // The first vertex of the largest dot product (Eigen's dot: x + (y + z)). Four vertices per
+  // step, each lane keeping its own first largest; then the largest of the lanes, the earliest
+  // among equal ones, and the rest one by one: the same vertex as one by one.
+  const std::size_t n = vertices_.size();
+  std::size_t best = 0, i = 0;
   float bestDot = -std::numeric_limits<float>::infinity();
-  for (std::size_t i = 0; i < vertices_.size(); ++i) {
+#if defined(__SSE2__)
+  if (n >= 8) {
+    const __m128 dx = _mm_set1_ps(direction.x()), dy = _mm_set1_ps(direction.y()),
+                 dz = _mm_set1_ps(direction.z());
+    __m128 bestV = _mm_set1_ps(bestDot);
+    __m128i indexV = _mm_setzero_si128();
+    __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
+    const __m128i four = _mm_set1_epi32(4);
+    for (; i + 4 <= n; i += 4) {
+      const __m128 h = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(vertexX_.data() + i), dx),
+                                  _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(vertexY_.data() + i), dy),
+                                             _mm_mul_ps(_mm_loadu_ps(vertexZ_.data() + i), dz)));
+      const __m128 larger = _mm_cmpgt_ps(h, bestV);
+      bestV = _mm_or_ps(_mm_and_ps(larger, h), _mm_andnot_ps(larger, bestV));
+      const __m128i take = _mm_castps_si128(larger);
+      indexV = _mm_or_si128(_mm_and_si128(take, lane), _mm_andnot_si128(take, indexV));
+      lane = _mm_add_epi32(lane, four);
+    }
+    alignas(16) float value[4];
+    alignas(16) std::int32_t index[4];
+    _mm_store_ps(value, bestV);
+    _mm_store_si128(reinterpret_cast<__m128i*>(index), indexV);
+    for (int k = 0; k < 4; ++k) {
+      const auto at = static_cast<std::size_t>(index[k]);
+      if (value[k] > bestDot || (value[k] == bestDot && at < best)) {
+        bestDot = value[k];
+        best = at;
+      }
+    }
+  }
+#endif
+  for (; i < n; ++i) {
     const float d = vertices_[i].dot(direction);
     if (d > bestDot) {
       bestDot = d;

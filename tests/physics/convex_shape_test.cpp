@@ -304,6 +304,58 @@ TEST(ConvexShape, SupportIsExtremeVertex) {
   EXPECT_LT((shape.support(Vec3(-1, 0.1f, -1)) - Vec3(-1, 2, -3)).norm(), 1e-6f);
 }
 
+// support (four vertices per SSE instruction) returns the first vertex of the largest dot
+// product, as one by one: random hulls of 5 to 64 vertices and random directions, and
+// directions where vertices tie.
+TEST(ConvexShape, SupportIsTheFirstVertexOfTheLargestDot) {
+  auto firstLargest = [](const ConvexShape& shape, const Vec3& direction) {
+    std::size_t best = 0;
+    float bestDot = -std::numeric_limits<float>::infinity();
+    for (std::size_t i = 0; i < shape.vertices().size(); ++i) {
+      const float d = shape.vertices()[i].dot(direction);
+      if (d > bestDot) bestDot = d, best = i;
+    }
+    return shape.vertices()[best];
+  };
+  auto same = [](const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; };
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int trial = 0; trial < 60; ++trial) {
+    std::vector<Vec3> points;
+    const int count = 5 + trial;
+    for (int i = 0; i < count; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+    const auto shape = ConvexShape::fromPoints(points);
+    ASSERT_TRUE(shape.ok());
+    for (int d = 0; d < 20; ++d) {
+      const Vec3 direction(u(rng), u(rng), u(rng));
+      EXPECT_TRUE(same(shape->support(direction), firstLargest(*shape, direction)))
+          << "trial " << trial << " direction " << d;
+    }
+  }
+  // Exact ties: a cube (8 vertices) and a cuboctahedron (12) along the 26 directions of
+  // {-1, 0, 1}^3, where two, three or four vertices share the largest dot product.
+  std::vector<Vec3> cube, cuboctahedron;
+  for (int x = -1; x <= 1; x += 2)
+    for (int y = -1; y <= 1; y += 2) {
+      for (int z = -1; z <= 1; z += 2) cube.emplace_back(x, y, z);
+      cuboctahedron.emplace_back(x, y, 0);
+      cuboctahedron.emplace_back(x, 0, y);
+      cuboctahedron.emplace_back(0, x, y);
+    }
+  for (const auto* points : {&cube, &cuboctahedron}) {
+    const auto shape = ConvexShape::fromPoints(*points);
+    ASSERT_TRUE(shape.ok());
+    ASSERT_GE(shape->vertices().size(), 8u);  // the four-wide path
+    for (int x = -1; x <= 1; ++x)
+      for (int y = -1; y <= 1; ++y)
+        for (int z = -1; z <= 1; ++z) {
+          const Vec3 direction(x, y, z);
+          EXPECT_TRUE(same(shape->support(direction), firstLargest(*shape, direction)))
+              << shape->vertices().size() << " vertices, direction " << direction.transpose();
+        }
+  }
+}
+
 TEST(ConvexShape, RaycastHitsMissesAndStartsInside) {
   const ConvexShape shape = ConvexShape::box(Vec3(0.1f, 0.1f, 0.1f));
   auto hit = shape.raycast(Vec3(0, 0, -1), Vec3(0, 0, 1), 10.0f);

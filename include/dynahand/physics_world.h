@@ -17,6 +17,7 @@
 
 #include <cassert>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -280,8 +281,9 @@ class World {
   static bool useVectorSweeps(bool enabled);
   // w->step(dt) for each of several different worlds with the same iteration counts, with
   // the same bits, in less time: their Gauss-Seidel sweeps run side by side, up to
-  // kMaxSideBySide at once (more are stepped in groups), where the CPU has AVX (otherwise
-  // simply one step after the other).
+  // kMaxSideBySide at once (more are stepped in groups; the surface sweeps two by two on a
+  // CPU with AVX but not AVX-512VL), where the CPU has AVX and useVectorSweeps is on
+  // (otherwise simply one step after the other).
   static constexpr std::size_t kMaxSideBySide = 4;
   static void stepSideBySide(std::span<World* const> worlds, float dt);
   // stepSideBySide of two worlds.

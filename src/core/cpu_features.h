@@ -15,6 +15,16 @@ inline bool cpuHasAvx() {
 #endif
 }
 
+// Whether the CPU has AVX2 (integer operations on 256-bit vectors).
+inline bool cpuHasAvx2() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") != 0;
+#else
+  return false;
+#endif
+}
+
 // Whether the CPU has AVX-512F and AVX-512VL (mask registers on 256-bit vectors).
 inline bool cpuHasAvx512vl() {
 #if defined(__x86_64__) && defined(__GNUC__)

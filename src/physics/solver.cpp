@@ -122,6 +122,7 @@ void solveRows(std::vector<SolverBody>& sb, std::vector<Row>& rows, bool useBias
 // solveRows of several worlds, block by block in turn: each world's rows in their own order
 // (the same bits), the worlds' chains of dependent rows overlapping in the CPU.
 void solveRowsSideBySide(std::span<World::Impl* const> worlds, bool useBias) {
+  assert(worlds.size() <= World::kMaxSideBySide);
   std::array<std::size_t, World::kMaxSideBySide> at{};
   for (bool any = true; any;) {
     any = false;
@@ -553,7 +554,7 @@ void World::beginStep(float h) {
                              Vec3(store[0], store[1], store[2]), store});
   }
 
-  // Surface rows (one body each), packed four to a batch on different slots.
+  // Surface rows (one body each), packed eight to a batch on different slots.
   prepareSurfaceRows(m, s, rows_, settings_.surfaceErp, invH);
   m.surfaceBatches.build(m.surfaceRows, m.solverBodies, dummy);
 

@@ -9,9 +9,6 @@
 #include <cstddef>
 #include <numeric>
 
-#if defined(__SSE__)
-#include <xmmintrin.h>
-#endif
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define DYNAHAND_SWEEP_AVX 1
@@ -20,13 +17,22 @@
 namespace dynahand::physics {
 namespace {
 constexpr int kSpread = 4;
+// The width of the table that fixed each slot's row order and the mass splitting before
+// session 14 (batches were four wide); kept so that results stay the same.
+constexpr int kOrderLanes = 4;
 constexpr int kMinRowsToSplit = 32;  // fewer rows on one slot are never split
 }  // namespace
 
 void SurfaceBatches::reserve(int rows) {
   const auto n = static_cast<std::size_t>(rows);
-  batches_.reserve(n / 4 + 1);
+  // A batch per eight rows, or per row of the largest slot (at most a quarter of them).
+  const std::size_t batches = n / 4 + 1;
+  batches_.reserve(batches);
+  lanes_.reserve(batches);
+  changed_.reserve(batches);
+  cellRow_.reserve(batches * kLanes);
   order_.reserve(n);
+  spread_.reserve(n);
 }
 
 namespace {
@@ -121,11 +127,11 @@ __attribute__((target("avx"))) void fillBatchAvx(Batch& b, const PreparedSurface
 void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
                            const std::vector<SolverBody>& bodies, int dummySlot) {
   slotCount_ = static_cast<int>(bodies.size());
-  dummySlot_ = dummySlot;
   const int n = static_cast<int>(rows.size());
-  // Slots with more rows than a four-wide sweep has batches are split (see the header), but
-  // not small sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster.
-  const int target = std::max(1, (n + 3) / 4);
+  // Slots with more than a quarter of the rows are split (see the header), but not small
+  // sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster. (A quarter:
+  // the batches were four wide until session 14, and the split decides the results.)
+  const int target = std::max(1, (n + kOrderLanes - 1) / kOrderLanes);
   count_.assign(static_cast<std::size_t>(slotCount_), 0);
   for (const PreparedSurfaceRow& r : rows) ++count_[static_cast<std::size_t>(r.slot)];
   splits_.clear();
@@ -212,7 +218,6 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   // sweeping it from one side to the other; then rotated where the same dealing into a table
   // four wide wraps. Four was the sweep's width before session 14; keeping its order keeps
   // the results bit for bit (the rotation itself means nothing).
-  constexpr int kOrderLanes = 4;
   const int orderBatches = std::max((n + kOrderLanes - 1) / kOrderLanes, largest);
   const int batchCount = std::max((n + kLanes - 1) / kLanes, largest);
   batches_.resize(static_cast<std::size_t>(batchCount));
@@ -253,10 +258,10 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   static const PreparedSurfaceRow kPaddingRow{};
   const PreparedSurfaceRow* source[kLanes];
   alignas(32) float copies[kLanes];
-  for (int column = 0; column < batchCount; ++column) {
-    BatchLanes& l = lanes_[static_cast<std::size_t>(column)];
+  for (int batch = 0; batch < batchCount; ++batch) {
+    BatchLanes& l = lanes_[static_cast<std::size_t>(batch)];
     for (int lane = 0; lane < kLanes; ++lane) {
-      const int i = cellRow_[static_cast<std::size_t>(lane * batchCount + column)];
+      const int i = cellRow_[static_cast<std::size_t>(lane * batchCount + batch)];
       const PreparedSurfaceRow* r = i >= 0 ? &rows[static_cast<std::size_t>(i)] : &kPaddingRow;
       l.slot[lane] = i >= 0 ? virtualSlot_[static_cast<std::size_t>(i)] : dummySlot;
       l.row[lane] = i;
@@ -264,12 +269,13 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
       copies[lane] = i >= 0 ? slotCopies_[static_cast<std::size_t>(r->slot)] : 1.0f;
     }
 #if defined(DYNAHAND_SWEEP_AVX)
-    if (canSolveSideBySide()) {  // the vector path, or (for tests) neither
-      fillBatchAvx(batches_[static_cast<std::size_t>(column)], source, copies);
+    // Filled with AVX only when the sweep runs with it: the tests' switch turns off both.
+    if (canSolveSideBySide()) {
+      fillBatchAvx(batches_[static_cast<std::size_t>(batch)], source, copies);
       continue;
     }
 #endif
-    fillBatch(batches_[static_cast<std::size_t>(column)], source, copies);
+    fillBatch(batches_[static_cast<std::size_t>(batch)], source, copies);
   }
   changed_.assign(static_cast<std::size_t>(batchCount), 0);
   for (std::size_t i = 1; i < batches_.size(); ++i)
@@ -277,9 +283,9 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
       if (lanes_[i].slot[k] != lanes_[i - 1].slot[k]) changed_[i] |= 1u << k;
 }
 
-float* SurfaceBatches::laneBody(std::vector<SolverBody>& bodies, int slot) {
-  return slot < slotCount_ ? bodies[static_cast<std::size_t>(slot)].v.data()
-                           : copies_[static_cast<std::size_t>(slot - slotCount_)].v.data();
+SolverBody* SurfaceBatches::laneBody(std::vector<SolverBody>& bodies, int slot) {
+  return slot < slotCount_ ? &bodies[static_cast<std::size_t>(slot)]
+                           : &copies_[static_cast<std::size_t>(slot - slotCount_)];
 }
 
 void SurfaceBatches::beginCopies(const std::vector<SolverBody>& bodies) {
@@ -315,13 +321,16 @@ void SurfaceBatches::solveFallback(std::vector<SolverBody>& bodies, bool useBias
     Batch& b = batches_[i];
     for (int k = 0; k < kLanes; ++k) {
       const int slot = lanes_[i].slot[k];
-      SolverBody& body = *reinterpret_cast<SolverBody*>(laneBody(bodies, slot));
+      SolverBody& body = *laneBody(bodies, slot);
       // Summed as the vector paths sum: (x + y) + z.
       const float jv = ((b.nx[k] * body.v.x() + b.ny[k] * body.v.y()) + b.nz[k] * body.v.z()) +
                        ((b.ax[k] * body.w.x() + b.ay[k] * body.w.y()) + b.az[k] * body.w.z());
       const float old = b.impulse[k];
       const float base = old - b.effMass[k] * (useBias ? b.bias[k] : b.relaxBias[k]);
-      const float clamped = std::min(std::max(base - b.effMass[k] * jv, b.lower[k]), b.upper[k]);
+      // Clamped as the vector max and min do: equal values (+0 and -0) give the bound.
+      const float target = base - b.effMass[k] * jv;
+      const float raised = target > b.lower[k] ? target : b.lower[k];
+      const float clamped = raised < b.upper[k] ? raised : b.upper[k];
       const float d = clamped - old;
       b.impulse[k] = clamped;
       const float invMass = body.invMass * massScale_[static_cast<std::size_t>(slot)];
@@ -343,8 +352,8 @@ struct alignas(32) EightBodies {
   __m256 pull;  // the body's inverse mass x the lane's massScale_ (the normal's factor)
 
   // Lanes in `lanes` (a bit mask) write their velocities back to their bodies p[k].
-  __attribute__((target("avx"), always_inline)) inline void writeBack(unsigned lanes,
-                                                                      float* const p[8]) const {
+  __attribute__((target("avx"), always_inline)) inline void writeBack(
+      unsigned lanes, SolverBody* const p[8]) const {
     alignas(32) float t[6][8];
     _mm256_store_ps(t[0], vx);
     _mm256_store_ps(t[1], vy);
@@ -354,7 +363,7 @@ struct alignas(32) EightBodies {
     _mm256_store_ps(t[5], wz);
     for (; lanes != 0; lanes &= lanes - 1) {
       const int k = __builtin_ctz(lanes);
-      SolverBody& body = *reinterpret_cast<SolverBody*>(p[k]);
+      SolverBody& body = *p[k];
       body.v = Vec3(t[0][k], t[1][k], t[2][k]);
       body.w = Vec3(t[3][k], t[4][k], t[5][k]);
     }
@@ -423,13 +432,12 @@ struct SurfaceSweeps {
   // Lanes `lanes` (a bit mask) of batch i take their bodies (p: where they are).
   __attribute__((target("avx"), always_inline)) static inline void load(
       SurfaceBatches& sweep, std::vector<SolverBody>& bodies, std::size_t i, unsigned lanes,
-      float* p[kLanes], EightBodies& lane) {
+      SolverBody* p[kLanes], EightBodies& lane) {
     for (; lanes != 0; lanes &= lanes - 1) {
       const int k = __builtin_ctz(lanes);
       const int slot = sweep.lanes_[i].slot[k];
       p[k] = sweep.laneBody(bodies, slot);
-      lane.loadLane(k, *reinterpret_cast<const SolverBody*>(p[k]),
-                    sweep.massScale_[static_cast<std::size_t>(slot)]);
+      lane.loadLane(k, *p[k], sweep.massScale_[static_cast<std::size_t>(slot)]);
     }
   }
 
@@ -441,7 +449,7 @@ struct SurfaceSweeps {
       SurfaceBatches* const* sweeps, std::vector<SolverBody>* const* bodies, std::size_t from,
       std::size_t to, bool useBias) {
     constexpr unsigned kAll = (1u << kLanes) - 1;
-    float* p[M][kLanes];
+    SolverBody* p[M][kLanes];
     EightBodies lane[M];
 #pragma GCC unroll 4
     for (int w = 0; w < M; ++w) {

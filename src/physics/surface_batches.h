@@ -1,6 +1,6 @@
 // Surface rows (one body each, the tracker's thousands of point-on-plane constraints) packed
 // eight to a batch, the eight on different solver slots, and solved eight at a time with AVX
-// (SSE: two halves of four). Within a batch the rows touch different bodies, so solving them
+// (without it, one at a time). Within a batch the rows touch different bodies, so solving them
 // together is the same as solving them one after another: still projected Gauss-Seidel.
 // Since every row moves one body only, a sweep's result depends on nothing but each slot's
 // order of its rows; the batches only schedule the slots' chains side by side. A slot
@@ -30,13 +30,14 @@ struct PreparedSurfaceRow {
 class SurfaceBatches {
  public:
   // Packs the rows; `dummySlot` is a slot that never moves (padding lanes point at it).
-  // bodies: the solver slots (their inverse masses are folded into the rows).
+  // bodies: the solver slots (their count: copies of split slots are numbered after them).
   void build(const std::vector<PreparedSurfaceRow>& rows, const std::vector<SolverBody>& bodies,
              int dummySlot);
   // One sweep over every row, with the position bias (solve) or the relax bias.
   void solve(std::vector<SolverBody>& bodies, bool useBias);
   // sweeps[i]->solve(*bodies[i], useBias) for each i (of different worlds), side by side,
-  // batch by batch, up to four at a time: each lane does exactly what solve() does, so the
+  // batch by batch, up to four at a time with AVX-512VL (two with AVX alone, whose sixteen
+  // registers hold two worlds' lanes): each lane does exactly what solve() does, so the
   // same bits, but the sweeps' latency chains overlap.
   static void solveSideBySide(std::span<SurfaceBatches* const> sweeps,
                               std::span<std::vector<SolverBody>* const> bodies, bool useBias);
@@ -72,7 +73,7 @@ class SurfaceBatches {
   struct Split {
     int slot, first, copies;
   };
-  float* laneBody(std::vector<SolverBody>& bodies, int slot);
+  SolverBody* laneBody(std::vector<SolverBody>& bodies, int slot);
   void beginCopies(const std::vector<SolverBody>& bodies);  // every copy = its slot
   void endCopies(std::vector<SolverBody>& bodies) const;    // each split slot = its copies' mean
 
@@ -96,7 +97,6 @@ class SurfaceBatches {
   std::vector<float> massScale_;
   std::vector<SolverBody> copies_;
   int slotCount_ = 0;  // real solver slots; copies are numbered after them
-  int dummySlot_ = 0;  // build()'s: the slot padding lanes point at
 };
 
 }  // namespace dynahand::physics

@@ -1,5 +1,7 @@
 #include "track/finger_detector.h"
 
+#include "core/cpu_features.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -26,7 +28,9 @@ int roundToPixel(float x) {
 
 // The samples of one scanline: sample col (t = tMin + col across, from rowBase = c + axis s)
 // is on when its pixel (c + axis s + across t, rounded) is in the box and on the mask. Bit
-// col % 64 of on[col / 64]; the words must hold `columns` bits.
+// col % 64 of on[col / 64]; the words must hold `columns` bits. The box lies inside the
+// image; rowAvx2 reads pixel 0 for the lanes outside it (and ignores it), so the mask must not
+// be empty (detect() asks for 50 mask pixels).
 struct ScanlineSampler {
   const std::uint8_t* mask;
   int width;
@@ -109,20 +113,11 @@ struct ScanlineSampler {
 #endif
 };
 
-#if defined(__x86_64__) && defined(__GNUC__)
-std::atomic<bool> vectorSampling{__builtin_cpu_supports("avx2") != 0};
-#else
-std::atomic<bool> vectorSampling{false};
-#endif
+std::atomic<bool> vectorSampling{cpuHasAvx2()};
 }  // namespace
 
 bool FingerDetector::useVectorSampling(bool enabled) {
-#if defined(__x86_64__) && defined(__GNUC__)
-  __builtin_cpu_init();
-  vectorSampling.store(enabled && __builtin_cpu_supports("avx2") != 0);
-#else
-  (void)enabled;
-#endif
+  vectorSampling.store(enabled && cpuHasAvx2());
   return vectorSampling.load();
 }
 
@@ -233,7 +228,7 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
   // A sample t across the scanline through rowBase = c + axis s is on when its pixel
   // (c + axis s + across t, the same sums as one expression) is on the mask.
   const ScanlineSampler sampler{cloud.mask.data(), width, box};
-  const bool vector = vectorSampling.load(std::memory_order_relaxed);
+  [[maybe_unused]] const bool vector = vectorSampling.load(std::memory_order_relaxed);
   rowSamples_.resize(static_cast<std::size_t>(columns + 63) / 64);
   std::uint64_t* const on = rowSamples_.data();
 

@@ -82,7 +82,7 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
     world.settings().iterations = settings_.iterations;
     world.settings().relaxIterations = settings_.relaxIterations;
   }
-  // Lanes by decreasing run length (ties in lane order), so that paired runs end together.
+  // Lanes by decreasing run length (ties in lane order), so that runs side by side end together.
   for (std::size_t k = 0; k < lanes_.size(); ++k) {
     const int steps = lanes_[k]->strategy->steps(settings_.substeps);
     auto at = runOrder_.begin();

@@ -272,9 +272,9 @@ TEST(Determinism, SurfaceRowsPreparedFourAtATimeGiveTheSameBytes) {
 
 // Worlds stepped side by side (their sweeps interleaved) end every step with the same bytes
 // as when each is stepped alone, and as with the one-by-one surface sweep: four worlds with
-// different row counts (the shorter sweeps run out first), a weld group in one of them
-// (a slot split into copies), contacts and limits in all; side by side as four, as two pairs
-// (stepTogether), and as three and one.
+// different row counts (the shorter sweeps run out first; one now and then has none), a weld
+// group in one of them (a slot split into copies), contacts and limits in all; side by side
+// as four, as two pairs (stepTogether), and as three and one.
 TEST(Determinism, WorldsSteppedSideBySideGiveTheSameBytesAsAlone) {
   constexpr int kWorlds = 4;
   struct Run {
@@ -283,6 +283,7 @@ TEST(Determinism, WorldsSteppedSideBySideGiveTheSameBytesAsAlone) {
   };
   auto fill = [](World& w, int step, int which) {
     w.rows().clear();
+    if (which == 3 && step % 6 == 0) return;  // a step without surface rows: no batches
     const int counts[kWorlds] = {300 + 7 * step, 120 + 3 * step, 450 - 5 * step, 40 + step};
     scenes::addRandomSurfaceRows(w, counts[which], static_cast<std::uint64_t>(1000 * which + step),
                                  0.01f);

@@ -131,8 +131,8 @@ TEST(FingerDetector, ScanlineRunsFollowTheSampleBySampleRule) {
       if (sample[static_cast<std::size_t>(c)])
         on[static_cast<std::size_t>(c / 64)] |= std::uint64_t{1} << (c % 64);
     }
-    // The rule: a run ends at the second off sample after it; one still open at the end
-    // (including one whose gap the end cuts short) is left out.
+    // The rule: a run ends at the second off sample after it; one whose last sample is on
+    // (still open at the end) is left out.
     std::vector<std::pair<int, int>> expected;
     int begin = -1, gap = 0;
     for (int col = 0; col <= columns; ++col) {

@@ -96,7 +96,7 @@ void runStrategiesSideBySide(std::span<Strategy* const> strategies,
   std::array<physics::World*, kSlots> worlds;
   for (;;) {
     // The worlds with a step to take now; those whose step length differs from the first's
-    // step on their own.
+    // are stepped alone.
     std::size_t count = 0;
     float dt = 0.0f;
     for (std::size_t k = 0; k < kSlots; ++k) {

@@ -3,8 +3,9 @@
 // state. Strategies only bias the simulation (welds, cones, drives, labelled points)
 // and must leave the world's configuration as they found it; the shared Simulator and
 // the error metric do the rest. A strategy says what each physics step of its run is
-// (beforeStep), and the tracker runs the steps: one run alone, or two runs side by side
-// with their worlds stepped together (the same bits, less time). To add one: a file here,
+// (beforeStep), and the tracker runs the steps: one run alone, or up to
+// physics::World::kMaxSideBySide runs side by side with their worlds stepped together
+// (World::stepSideBySide: the same bits, less time). To add one: a file here,
 // a StrategyKind, and a line in makeStrategy().
 #pragma once
 
@@ -32,7 +33,7 @@ class Strategy {
  public:
   virtual ~Strategy() = default;
   virtual StrategyKind kind() const = 0;
-  // Physics steps of a run with `substeps` per phase (for pairing runs of equal length).
+  // Physics steps of a run with `substeps` per phase (for ordering the runs side by side).
   virtual int steps(int substeps) const = 0;
   // Sets up this frame's run; false when there is nothing to do (no candidate this frame).
   virtual bool begin(StrategyContext& context) = 0;

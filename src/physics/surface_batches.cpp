@@ -144,9 +144,6 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     copyCount += copies;
   }
   copies_.resize(static_cast<std::size_t>(copyCount));
-  slotCopies_.assign(static_cast<std::size_t>(slotCount_), 1.0f);
-  for (const Split& sp : splits_)
-    slotCopies_[static_cast<std::size_t>(sp.slot)] = static_cast<float>(sp.copies);
   // Each row's solving slot: its own, or for a split slot the copies in turn (so that every
   // copy sees rows from all over the body).
   virtualSlot_.resize(static_cast<std::size_t>(n));
@@ -266,7 +263,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
       l.slot[lane] = i >= 0 ? virtualSlot_[static_cast<std::size_t>(i)] : dummySlot;
       l.row[lane] = i;
       source[lane] = r;
-      copies[lane] = i >= 0 ? slotCopies_[static_cast<std::size_t>(r->slot)] : 1.0f;
+      copies[lane] = i >= 0 ? massScale_[static_cast<std::size_t>(l.slot[lane])] : 1.0f;
     }
 #if defined(DYNAHAND_SWEEP_AVX)
     // Filled with AVX only when the sweep runs with it: the tests' switch turns off both.
@@ -552,7 +549,6 @@ void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
 void SurfaceBatches::solveSideBySide(std::span<SurfaceBatches* const> sweeps,
                                      std::span<std::vector<SolverBody>* const> bodies,
                                      bool useBias) {
-  static_assert(offsetof(SolverBody, invMass) == 12 && offsetof(SolverBody, w) == 16);
   assert(sweeps.size() == bodies.size());
   if (!canSolveSideBySide()) {
     for (std::size_t w = 0; w < sweeps.size(); ++w) sweeps[w]->solveFallback(*bodies[w], useBias);

@@ -89,9 +89,8 @@ class SurfaceBatches {
   std::vector<int> order_, count_, start_, slotsByCount_;
   std::vector<int> virtualSlot_;  // (rows) the slot or copy a row is solved on
   std::vector<Split> splits_;
-  std::vector<int> splitOfSlot_;   // (slots) index into splits_, -1 when not split
-  std::vector<int> rowsSeen_;      // (slots) scratch while dealing rows to copies
-  std::vector<float> slotCopies_;  // (slots) copies a slot is split into (1: not split)
+  std::vector<int> splitOfSlot_;  // (slots) index into splits_, -1 when not split
+  std::vector<int> rowsSeen_;     // (slots) scratch while dealing rows to copies
   // (slots, then copies) the factor on a lane body's inverse mass: a copy holds 1/copies of
   // its slot's mass; 1 for a slot
   std::vector<float> massScale_;

@@ -28,7 +28,7 @@ int roundToPixel(float x) {
 
 // The samples of one scanline: sample col (t = tMin + col across, from rowBase = c + axis s)
 // is on when its pixel (c + axis s + across t, rounded) is in the box and on the mask. Bit
-// col % 64 of on[col / 64]; the words must hold `columns` bits. The box lies inside the
+// col % 64 of on[col / 64]; the words must hold `columns` bits, all clear. The box lies inside the
 // image; rowAvx2 reads pixel 0 for the lanes outside it (and ignores it), so the mask must not
 // be empty (detect() asks for 50 mask pixels).
 struct ScanlineSampler {
@@ -43,10 +43,10 @@ struct ScanlineSampler {
     return mask[static_cast<std::size_t>(v * width + u)] != 0;
   }
 
-  void row(const Vec2& rowBase, const Vec2& across, float tMin, int columns,
+  // Samples [from, to) one by one.
+  void row(const Vec2& rowBase, const Vec2& across, float tMin, int from, int to,
            std::uint64_t* on) const {
-    for (int w = 0; w < (columns + 63) / 64; ++w) on[w] = 0;
-    for (int col = 0; col < columns; ++col)
+    for (int col = from; col < to; ++col)
       if (sample(rowBase, across, tMin + static_cast<float>(col)))
         on[col / 64] |= std::uint64_t{1} << (col % 64);
   }
@@ -68,7 +68,6 @@ struct ScanlineSampler {
   // the fraction's test for the rounding, so the same pixels.
   __attribute__((target("avx2"))) void rowAvx2(const Vec2& rowBase, const Vec2& across, float tMin,
                                                int columns, std::uint64_t* on) const {
-    for (int w = 0; w < (columns + 63) / 64; ++w) on[w] = 0;
     const __m256 baseX = _mm256_set1_ps(rowBase.x()), baseY = _mm256_set1_ps(rowBase.y());
     const __m256 acrossX = _mm256_set1_ps(across.x()), acrossY = _mm256_set1_ps(across.y());
     const __m256 first = _mm256_set1_ps(tMin);
@@ -88,9 +87,7 @@ struct ScanlineSampler {
                         _mm256_cmp_ps(_mm256_and_ps(py, absMask), limit, _CMP_LT_OQ));
       const int count = std::min(8, columns - col);
       if (_mm256_movemask_ps(small) != 0xFF) {  // far outside any image: one by one
-        for (int k = 0; k < count; ++k)
-          if (sample(rowBase, across, tMin + static_cast<float>(col + k)))
-            on[(col + k) / 64] |= std::uint64_t{1} << ((col + k) % 64);
+        row(rowBase, across, tMin, col, col + count, on);
         continue;
       }
       const __m256i u = roundToPixels(px), v = roundToPixels(py);
@@ -237,12 +234,13 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
   for (int row = 0; row < rows; ++row) {
     const float s = sMax - static_cast<float>(row);
     const Vec2 rowBase = c + axis * s;
+    std::fill(rowSamples_.begin(), rowSamples_.end(), std::uint64_t{0});
 #if defined(__x86_64__) && defined(__GNUC__)
     if (vector)
       sampler.rowAvx2(rowBase, across, tMin, columns, on);
     else
 #endif
-      sampler.row(rowBase, across, tMin, columns, on);
+      sampler.row(rowBase, across, tMin, 0, columns, on);
     scanlineRuns(on, columns, runs_);
     // Continue segments: a run overlapping previous runs joins the first one's segment;
     // overlapping several means they came together.

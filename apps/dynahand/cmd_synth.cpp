@@ -1,4 +1,5 @@
 // dynahand synth: writes a synthetic depth sequence with ground truth (docs/synth.md).
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -33,6 +34,8 @@ const CommandRegistration kSynthCommand{Command{
         std::string out, contactSheet;
         bool list = false;
         std::string placement = "desk", background = "none";
+        float proportionSpread = 0.0f;
+        std::uint64_t proportionSeed = 1;
       };
       auto flags = std::make_shared<Flags>();
       synth::SynthOptions& o = flags->options;
@@ -84,6 +87,14 @@ const CommandRegistration kSynthCommand{Command{
       sub.add_option("--hand-width", o.hand.width, "palm width across the knuckles, m")
           ->capture_default_str()
           ->check(CLI::Range(0.05, 0.13));
+      sub.add_option("--proportion-spread", flags->proportionSpread,
+                     "hand proportions unlike the tracker's model: each bone length and finger "
+                     "and palm thickness factor uniform in [1-F, 1+F] (0 = the model's shape)")
+          ->capture_default_str()
+          ->check(CLI::Range(0.0, 0.5));
+      sub.add_option("--proportion-seed", flags->proportionSeed,
+                     "seed of the random hand proportions")
+          ->capture_default_str();
       sub.add_flag("--list", flags->list, "list clips and sensor profiles and exit");
       sub.add_option(
           "--contact-sheet", flags->contactSheet,
@@ -96,6 +107,8 @@ const CommandRegistration kSynthCommand{Command{
           "/tmp/two\n"
           "  dynahand synth --motion count --placement head --table --hand-length 0.17 --out "
           "/tmp/count\n"
+          "  dynahand synth --motion pinch --proportion-spread 0.15 --proportion-seed 7 --out "
+          "/tmp/pinch\n"
           "  dynahand synth --contact-sheet docs/images/synth_contact_sheet.png\n"
           "Output: camera.json, depth/*.png, groundtruth.jsonl, poses.jsonl, synth.json "
           "(docs/synth.md).");
@@ -112,6 +125,7 @@ const CommandRegistration kSynthCommand{Command{
             {"wall", synth::Background::Wall},
             {"torso", synth::Background::Torso}};
         opts.scene.background = backgrounds.at(flags->background);
+        opts.proportions = synth::randomProportions(flags->proportionSeed, flags->proportionSpread);
         if (!flags->contactSheet.empty()) {
           synth::Scene scene = opts.scene;
           if (flags->background == "none") scene.background = synth::Background::Wall;

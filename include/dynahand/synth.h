@@ -91,13 +91,19 @@ struct SynthOptions {
   Scene scene;
   model::HandDimensions hand;  // hand size (render surface and model scale together)
   SurfaceRadii surface;        // render-surface radii for the reference hand size
+  // Shape of the rendered hand relative to the tracker's model (bone lengths, finger and
+  // palm thickness; all ones = the model's shape): rendered depth and HandTruth::keypoints
+  // follow it, HandTruth::pose stays the model's. Each factor in [0.5, 1.5].
+  HandProportions proportions;
 };
 
 // Ground truth of one hand in one frame.
 struct HandTruth {
   model::Side side = model::Side::Right;
-  Keypoints21 keypoints = zeroKeypoints();  // m, camera frame, MediaPipe order
-  model::ModelPose pose;  // per-body world (camera-frame) poses of the hand's model
+  // m, camera frame, MediaPipe order: the rendered hand's joints (options.proportions applied)
+  Keypoints21 keypoints = zeroKeypoints();
+  // per-body world (camera-frame) poses of the hand's model (without proportions)
+  model::ModelPose pose;
 };
 
 struct SyntheticFrame {

@@ -63,6 +63,36 @@ struct SurfaceRadii {
   float padOffset = 0.0020f;          // m, how far fingertip pads bulge palmar of the bone
 };
 
+// Per-hand shape factors of the rendered hand relative to the tracking model (1 = same):
+// the ground truth and the render surface take them, the tracker's model does not, so a
+// benchmark can measure how much a hand shaped unlike the model costs.
+struct HandProportions {
+  // [finger 0 thumb..4 pinky][bone 0 = wrist->base (metacarpal), 1..3 phalanges], all 1 by default
+  std::array<std::array<float, 4>, 5> boneLength = {{{1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f}}};
+  // render radii of each finger, 1 by default
+  std::array<float, 5> fingerThickness = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
+  float palmThickness = 1.0f;
+
+  // Every factor exactly 1.
+  bool identity() const;
+};
+
+// Each factor uniform in [1-spread, 1+spread], deterministic from seed (portable: the same
+// numbers on every platform). spread 0 gives all ones.
+HandProportions randomProportions(std::uint64_t seed, float spread);
+
+// Stretches each bone of the 21-keypoint skeleton (MediaPipe order) about its parent
+// keypoint, moving the children along; the wrist stays fixed. All ones leaves the
+// keypoints untouched (bit for bit).
+void applyProportions(const HandProportions& p, HandKeypoints& keypoints);
+
+// Finger radii times fingerThickness, palm half-thickness times palmThickness.
+SurfaceRadii scaledRadii(const SurfaceRadii& radii, const HandProportions& p);
+
 // One hand's skeleton as the renderer needs it.
 struct HandSkeleton {
   HandKeypoints keypoints = zeroKeypoints();  // m, camera frame

@@ -1,8 +1,10 @@
-// The synthetic hand's render surface built from its skeleton (see synth_render.h).
+// The synthetic hand's render surface built from its skeleton, and hand proportions (per-bone
+// length and per-finger thickness factors of the rendered hand; see synth_render.h).
 #include <cassert>
 #include <cmath>
 
 #include "dynahand/synth_render.h"
+#include "random.h"
 
 namespace dynahand::synth {
 namespace {
@@ -86,6 +88,54 @@ void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii,
 
   assert(out.size() - firstPrimitive <= static_cast<std::size_t>(kMaxHandPrimitives));
   (void)firstPrimitive;
+}
+
+bool HandProportions::identity() const {
+  for (const auto& finger : boneLength)
+    for (float f : finger)
+      if (f != 1.0f) return false;
+  for (float f : fingerThickness)
+    if (f != 1.0f) return false;
+  return palmThickness == 1.0f;
+}
+
+HandProportions randomProportions(std::uint64_t seed, float spread) {
+  HandProportions p;
+  if (spread == 0.0f) return p;
+  const std::uint64_t key = detail::mix64(seed ^ 0x70726F706F72ull);  // "propor"
+  std::uint64_t index = 0;
+  const auto next = [&] {
+    const float u = detail::uniform(detail::bits(key, index++, 7));
+    return 1.0f + spread * (2.0f * u - 1.0f);
+  };
+  for (auto& finger : p.boneLength)
+    for (float& f : finger) f = next();
+  for (float& f : p.fingerThickness) f = next();
+  p.palmThickness = next();
+  return p;
+}
+
+void applyProportions(const HandProportions& p, HandKeypoints& keypoints) {
+  if (p.identity()) return;
+  const HandKeypoints original = keypoints;
+  for (int f = 0; f < 5; ++f) {
+    const auto& lengths = p.boneLength[static_cast<std::size_t>(f)];
+    std::size_t parent = 0;  // the wrist
+    for (int b = 0; b < 4; ++b) {
+      const auto child = static_cast<std::size_t>(kFingerBase[f] + b);
+      keypoints[child] = keypoints[parent] + lengths[static_cast<std::size_t>(b)] *
+                                                 (original[child] - original[parent]);
+      parent = child;
+    }
+  }
+}
+
+SurfaceRadii scaledRadii(const SurfaceRadii& radii, const HandProportions& p) {
+  SurfaceRadii out = radii;
+  for (std::size_t f = 0; f < 5; ++f)
+    for (float& r : out.finger[f]) r *= p.fingerThickness[f];
+  out.palmHalfThickness *= p.palmThickness;
+  return out;
 }
 
 }  // namespace dynahand::synth

@@ -35,6 +35,14 @@ Status validate(const SynthOptions& o) {
   if (!(o.scene.handDistance == 0.0f ||
         (o.scene.handDistance >= 0.1f && o.scene.handDistance <= 3.0f)))
     return bad("hand distance must be 0 (auto) or in [0.1, 3] m");
+  const auto factorOk = [](float f) { return f >= 0.5f && f <= 1.5f; };
+  bool proportionsOk = factorOk(o.proportions.palmThickness);
+  for (std::size_t f = 0; f < 5; ++f) {
+    proportionsOk = proportionsOk && factorOk(o.proportions.fingerThickness[f]);
+    for (float length : o.proportions.boneLength[f])
+      proportionsOk = proportionsOk && factorOk(length);
+  }
+  if (!proportionsOk) return bad("every hand proportion factor must be in [0.5, 1.5]");
   return Ok{};
 }
 
@@ -86,6 +94,7 @@ struct SyntheticSequence::State {
   std::vector<model::JointAngles> playback;  // (frames) when options.poseFile is set
   Pose rest;                                 // right hand's rest placement, camera frame
   float surfaceScale = 1.0f;
+  SurfaceRadii radii;  // options.surface with options.proportions' thickness factors
   DepthRenderer renderer;
   SensorSimulator sensor;
   // Per-frame buffers (reused).
@@ -117,6 +126,7 @@ struct SyntheticSequence::State {
     out.side = sample.side;
     model::forwardKinematicsInto(m, sample.angles, out.pose);
     out.keypoints = model::keypoints21(m, out.pose);
+    applyProportions(options.proportions, out.keypoints);
   }
 };
 
@@ -155,6 +165,7 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
   const detail::SceneGeometry geometry = detail::sceneGeometry(options.scene, handDistance);
   state->renderer.setBackground(geometry.planes, geometry.solids);
   state->surfaceScale = options.hand.width / kReferenceWidth;
+  state->radii = scaledRadii(options.surface, options.proportions);
   state->surface.reserve(static_cast<std::size_t>(kMaxHandPrimitives * handCount));
   state->frame.hands.resize(static_cast<std::size_t>(handCount));
   return SyntheticSequence(std::move(state));
@@ -212,7 +223,7 @@ const SyntheticFrame& SyntheticSequence::frame(int index) {
     skeleton.leftHand = truth.side == model::Side::Left;
     skeleton.scale = s.surfaceScale;
     s.surface.clear();
-    buildHandSurface(skeleton, s.options.surface, s.surface);
+    buildHandSurface(skeleton, s.radii, s.surface);
     s.renderer.draw(s.surface, h == 0 ? PixelLabel::Hand0 : PixelLabel::Hand1);
   }
   s.sensor.apply(s.renderer.depth(), s.renderer.labels(), index,

@@ -12,7 +12,7 @@
 namespace dynahand::synth {
 namespace {
 
-constexpr int kSynthFormatVersion = 1;
+constexpr int kSynthFormatVersion = 2;
 
 const char* placementName(CameraPlacement p) {
   return p == CameraPlacement::DeskFacing ? "desk" : "head";
@@ -60,6 +60,19 @@ std::string describe(const SyntheticSequence& seq, int writtenFrames) {
                 {"table", o.scene.table},
                 {"table_drop_m", o.scene.tableDrop},
                 {"hand_distance_m", o.scene.handDistance}};
+  const HandProportions& p = o.proportions;
+  // Element by element (GCC's -Wnull-dereference misfires on nlohmann's std::array path).
+  nlohmann::ordered_json bones = nlohmann::ordered_json::array();
+  nlohmann::ordered_json thickness = nlohmann::ordered_json::array();
+  for (std::size_t f = 0; f < p.boneLength.size(); ++f) {
+    nlohmann::ordered_json finger = nlohmann::ordered_json::array();
+    for (float length : p.boneLength[f]) finger.push_back(static_cast<double>(length));
+    bones.push_back(std::move(finger));
+    thickness.push_back(static_cast<double>(p.fingerThickness[f]));
+  }
+  j["proportions"] = {{"bone_length", std::move(bones)},
+                      {"finger_thickness", std::move(thickness)},
+                      {"palm_thickness", p.palmThickness}};
   return j.dump(2) + "\n";
 }
 

@@ -62,7 +62,8 @@ const CommandRegistration kSynthCommand{Command{
       sub.add_option("--seed", o.seed, "sensor noise seed")->capture_default_str();
       sub.add_option("--out", flags->out, "output directory (must not hold a sequence)");
       sub.add_option("--placement", flags->placement,
-                     "camera placement: desk (facing the user) or head (head-mounted)")
+                     "camera placement: desk (facing the user) or head (head-mounted; re-places "
+                     "pose files too)")
           ->capture_default_str()
           ->check(CLI::IsMember({"desk", "head"}));
       sub.add_option("--background", flags->background, "background: none, wall or torso")

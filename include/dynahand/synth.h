@@ -80,10 +80,17 @@ struct SynthOptions {
   // Optional: play poses instead of a clip, retargeted to the default hand at `hand` size:
   // a pose JSONL of the default hand (docs/formats/pose.md; joint angles carried over) or
   // the original authors' .pose (their model's 21 keypoints fitted by model::KeypointFitter).
-  // Frames past the file's end wrap around. Poses keep the file's camera placement.
+  // Frames past the file's end wrap around. Placement: `desk` keeps the file's camera
+  // placement; `head` re-places the whole sequence rigidly (one transform for every frame)
+  // so that the first played pose's forearm lies at the head-mounted rest placement: the
+  // same motion, seen from the head-mounted camera.
   std::filesystem::path poseFile;
   std::filesystem::path intelModelFile;  // for .pose; empty = model_hand.json beside it
-  std::string profile = "tof";           // a sensorProfiles() name
+  // Optional: the poses already loaded (loadPoseAngles for the same file and hand size), so
+  // that many sequences share one load; played instead of poseFile when set.
+  std::shared_ptr<const std::vector<model::JointAngles>> poseAngles;
+  int poseStart = 0;  // pose file / poseAngles: frame i plays pose poseStart + i (wrapping)
+  std::string profile = "tof";  // a sensorProfiles() name
   int frameCount = 300;
   float framesPerSecond = 30.0f;
   float speed = 1.0f;      // clip time multiplier
@@ -96,6 +103,12 @@ struct SynthOptions {
   // follow it, HandTruth::pose stays the model's. Each factor in [0.5, 1.5].
   HandProportions proportions;
 };
+
+// The joint angles SynthOptions::poseFile plays: retargeted to the default hand at
+// options.hand size (see SynthOptions::poseFile), root in the file's camera frame, at most
+// `maxPoses` of them (0: all). For SynthOptions::poseAngles.
+Result<std::vector<model::JointAngles>> loadPoseAngles(const SynthOptions& options,
+                                                       int maxPoses = 0);
 
 // Ground truth of one hand in one frame.
 struct HandTruth {

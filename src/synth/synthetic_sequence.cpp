@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <string>
 
 #include "clip_library.h"
@@ -35,6 +37,7 @@ Status validate(const SynthOptions& o) {
   if (!(o.scene.handDistance == 0.0f ||
         (o.scene.handDistance >= 0.1f && o.scene.handDistance <= 3.0f)))
     return bad("hand distance must be 0 (auto) or in [0.1, 3] m");
+  if (o.poseStart < 0) return bad("the first pose played must not be negative");
   const auto factorOk = [](float f) { return f >= 0.5f && f <= 1.5f; };
   bool proportionsOk = factorOk(o.proportions.palmThickness);
   for (std::size_t f = 0; f < 5; ++f) {
@@ -46,9 +49,10 @@ Status validate(const SynthOptions& o) {
   return Ok{};
 }
 
-// Joint angles of the default hand for each pose of a pose file (at most `frameCount`).
+// Joint angles of the default hand for each pose of a pose file (at most `maxPoses`).
 Result<std::vector<model::JointAngles>> loadPlayback(const SynthOptions& o,
-                                                     const model::ArticulatedModel& hand) {
+                                                     const model::ArticulatedModel& hand,
+                                                     std::size_t maxPoses) {
   std::vector<model::JointAngles> angles;
   const std::string name = o.poseFile.string();
   if (o.poseFile.extension() == ".pose") {
@@ -63,7 +67,7 @@ Result<std::vector<model::JointAngles>> loadPlayback(const SynthOptions& o,
     if (poses->empty()) return Error{name + ": no poses"};
     // Retarget by fitting our hand to their keypoints, each fit starting from the last.
     model::KeypointFitter fitter(hand);
-    const std::size_t count = std::min(poses->size(), static_cast<std::size_t>(o.frameCount));
+    const std::size_t count = std::min(poses->size(), maxPoses);
     for (std::size_t i = 0; i < count; ++i) {
       model::FitOptions fit;
       if (!angles.empty()) fit.initial = &angles.back();
@@ -79,20 +83,32 @@ Result<std::vector<model::JointAngles>> loadPlayback(const SynthOptions& o,
   if (Status s = model::checkPoseSequence(*poses, hand); !s)
     return Error{name + ": " + s.message()};
   // Same bodies and joints: the joint angles carry over to a hand of another size.
-  for (const model::ModelPose& pose : poses->frames)
+  for (const model::ModelPose& pose : poses->frames) {
+    if (angles.size() == maxPoses) break;
     angles.push_back(model::jointAngles(hand, pose));
+  }
   return angles;
 }
 
 }  // namespace
+
+Result<std::vector<model::JointAngles>> loadPoseAngles(const SynthOptions& options, int maxPoses) {
+  if (options.poseFile.empty()) return Error{"synth options: no pose file"};
+  const model::ArticulatedModel hand = model::makeDefaultHand(options.hand, model::Side::Right);
+  return loadPlayback(
+      options, hand,
+      maxPoses > 0 ? static_cast<std::size_t>(maxPoses) : std::numeric_limits<std::size_t>::max());
+}
 
 struct SyntheticSequence::State {
   SynthOptions options;
   SensorProfile profile;
   std::vector<model::ArticulatedModel> models;  // per hand
   const detail::ClipDefinition* clip = nullptr;
-  std::vector<model::JointAngles> playback;  // (frames) when options.poseFile is set
-  Pose rest;                                 // right hand's rest placement, camera frame
+  // Poses played when options.poseFile or poseAngles is set; placed by playbackPlacement.
+  std::shared_ptr<const std::vector<model::JointAngles>> playback;
+  Pose playbackPlacement;
+  Pose rest;  // right hand's rest placement, camera frame
   float surfaceScale = 1.0f;
   SurfaceRadii radii;  // options.surface with options.proportions' thickness factors
   DepthRenderer renderer;
@@ -107,10 +123,14 @@ struct SyntheticSequence::State {
 
   // Joint angles of hand h at frame `index`, root in the camera frame.
   void anglesAt(int index, std::vector<HandMotionSample>& out) const {
-    if (!playback.empty()) {
+    if (playback) {
       out.resize(1);
       out[0].side = model::Side::Right;
-      out[0].angles = playback[static_cast<std::size_t>(index) % playback.size()];
+      const std::size_t at =
+          (static_cast<std::size_t>(options.poseStart) + static_cast<std::size_t>(index)) %
+          playback->size();
+      out[0].angles = (*playback)[at];
+      out[0].angles.root = playbackPlacement * out[0].angles.root;
       return;
     }
     const float time = static_cast<float>(index) / options.framesPerSecond * options.speed;
@@ -142,7 +162,8 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
   auto state = std::make_unique<State>(options, *profile);
 
   int handCount = 1;
-  if (options.poseFile.empty()) {
+  const bool playsPoses = !options.poseFile.empty() || options.poseAngles;
+  if (!playsPoses) {
     state->clip = detail::findClip(options.clip);
     if (!state->clip) {
       std::string names;
@@ -154,14 +175,31 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
   state->models.push_back(model::makeDefaultHand(options.hand, model::Side::Right));
   if (handCount == 2)
     state->models.push_back(model::makeDefaultHand(options.hand, model::Side::Left));
-  if (!options.poseFile.empty()) {
-    Result<std::vector<model::JointAngles>> played = loadPlayback(options, state->models[0]);
+  if (options.poseAngles) {
+    if (options.poseAngles->empty()) return Error{"synth options: no poses to play"};
+    for (const model::JointAngles& a : *options.poseAngles)
+      if (a.angles.size() != state->models[0].joints().size())
+        return Error{"synth options: the poses to play are not of the default hand"};
+    state->playback = options.poseAngles;
+  } else if (!options.poseFile.empty()) {
+    const auto wanted =
+        static_cast<std::size_t>(options.poseStart) + static_cast<std::size_t>(options.frameCount);
+    Result<std::vector<model::JointAngles>> played =
+        loadPlayback(options, state->models[0], wanted);
     if (!played) return played.error();
-    state->playback = std::move(played).value();
+    state->playback =
+        std::make_shared<const std::vector<model::JointAngles>>(std::move(played).value());
   }
 
   const float handDistance = detail::resolvedHandDistance(options.scene, state->profile);
   state->rest = detail::restPlacement(options.scene.placement, handDistance);
+  if (state->playback && options.scene.placement == CameraPlacement::HeadMounted) {
+    // One rigid transform for the whole sequence: the first played pose's forearm onto the
+    // head-mounted rest placement (desk keeps the file's own camera placement).
+    const model::JointAngles& first =
+        (*state->playback)[static_cast<std::size_t>(options.poseStart) % state->playback->size()];
+    state->playbackPlacement = state->rest * first.root.inverse();
+  }
   const detail::SceneGeometry geometry = detail::sceneGeometry(options.scene, handDistance);
   state->renderer.setBackground(geometry.planes, geometry.solids);
   state->surfaceScale = options.hand.width / kReferenceWidth;

@@ -304,6 +304,107 @@ TEST(SyntheticSequence, PlaysTheAuthorsAnimbankRetargetedToOurHand) {
   }
 }
 
+// All 21 keypoints project into the image within the profile's range.
+bool handInView(const SyntheticSequence& seq, const Keypoints21& k) {
+  for (const Vec3& p : k) {
+    const Vec2 uv = seq.intrinsics().project(p);
+    if (!seq.intrinsics().contains(uv.x(), uv.y())) return false;
+    if (p.z() < seq.profile().minRange || p.z() > seq.profile().maxRange) return false;
+  }
+  return true;
+}
+
+TEST(SyntheticSequence, HeadPlacementReplacesPoseFilesRigidly) {
+  const std::filesystem::path dir = test::scratchDir("synth_pose_head");
+  SynthOptions o = optionsFor("count", "tof", 30);
+  Result<SyntheticSequence> original = SyntheticSequence::create(o);
+  ASSERT_TRUE(original.ok());
+  model::PoseSequence poses;
+  for (const model::Body& b : original->model(0).bodies()) poses.bodyNames.push_back(b.name);
+  for (int f = 0; f < 30; ++f) poses.frames.push_back(original->truth(f, 0).pose);
+  ASSERT_TRUE(model::savePoseSequence(poses, dir / "poses.jsonl").ok());
+
+  SynthOptions desk = o, head = o;
+  desk.poseFile = head.poseFile = dir / "poses.jsonl";
+  head.scene.placement = CameraPlacement::HeadMounted;
+  Result<SyntheticSequence> a = SyntheticSequence::create(desk),
+                            b = SyntheticSequence::create(head);
+  ASSERT_TRUE(a.ok() && b.ok());
+  const Result<SyntheticSequence> headClip = [&] {
+    SynthOptions c = o;
+    c.scene.placement = CameraPlacement::HeadMounted;
+    return SyntheticSequence::create(c);
+  }();
+  ASSERT_TRUE(headClip.ok());
+  const HandTruth a0 = a->truth(0, 0), b0 = b->truth(0, 0);
+  // Seen from elsewhere: the back of the hand toward the camera, as the head clip has it.
+  EXPECT_GT((a0.keypoints[9] - b0.keypoints[9]).norm(), 0.02f);
+  const HandTruth clip0 = headClip->truth(0, 0);
+  const Vec3 palmDesk =
+      (a0.keypoints[5] - a0.keypoints[0]).cross(a0.keypoints[17] - a0.keypoints[0]);
+  const Vec3 palmHead =
+      (b0.keypoints[5] - b0.keypoints[0]).cross(b0.keypoints[17] - b0.keypoints[0]);
+  const Vec3 palmClip =
+      (clip0.keypoints[5] - clip0.keypoints[0]).cross(clip0.keypoints[17] - clip0.keypoints[0]);
+  EXPECT_LT(palmDesk.z() * palmHead.z(), 0.0f);  // the other side of the hand faces the camera
+  EXPECT_GT(palmHead.z() * palmClip.z(), 0.0f);
+  EXPECT_LT((b0.keypoints[0] - clip0.keypoints[0]).norm(), 0.05f);
+  // The same motion: distances between any keypoints of any two frames are kept.
+  for (int f : {0, 7, 19, 29}) {
+    const HandTruth ta = a->truth(f, 0), tb = b->truth(f, 0);
+    for (std::size_t i : {0u, 4u, 8u, 12u, 20u})
+      for (std::size_t j : {0u, 8u, 16u}) {
+        EXPECT_NEAR((ta.keypoints[i] - a0.keypoints[j]).norm(),
+                    (tb.keypoints[i] - b0.keypoints[j]).norm(), 1e-4f);
+      }
+    EXPECT_TRUE(handInView(*b, tb.keypoints)) << "frame " << f;
+    const SyntheticFrame& frame = b->frame(f);
+    int inside = 0;
+    for (const Vec3& p : frame.hands[0].keypoints) {
+      const Vec2 uv = b->intrinsics().project(p);
+      const std::size_t i = static_cast<std::size_t>(std::lround(uv.y())) * b->intrinsics().width +
+                            static_cast<std::size_t>(std::lround(uv.x()));
+      inside += b->labels()[i] == PixelLabel::Hand0;
+    }
+    EXPECT_GE(inside, 19) << "frame " << f;  // a few may hide behind the hand seen from above
+  }
+}
+
+TEST(SyntheticSequence, AnimbankStaysInViewFromTheHeadAndPlaysFromAnyPose) {
+  DYNAHAND_REQUIRE_SHARED_DATA(data);
+  SynthOptions o = optionsFor("", "tof", 2336);
+  o.poseFile = data / "intel" / "animbank.pose";
+  Result<std::vector<model::JointAngles>> angles = loadPoseAngles(o);
+  ASSERT_TRUE(angles.ok()) << angles.message();
+  ASSERT_EQ(angles->size(), 2336u);
+  o.poseAngles = std::make_shared<const std::vector<model::JointAngles>>(std::move(*angles));
+  for (CameraPlacement placement : {CameraPlacement::DeskFacing, CameraPlacement::HeadMounted}) {
+    o.scene.placement = placement;
+    Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+    ASSERT_TRUE(seq.ok());
+    int inView = 0, total = 0;
+    for (int f = 0; f < seq->frameCount(); f += 8, ++total)
+      inView += handInView(*seq, seq->truth(f, 0).keypoints);
+    const double fraction = static_cast<double>(inView) / total;
+    std::printf("animbank %s: %.1f%% of frames with every keypoint in view (tof)\n",
+                placement == CameraPlacement::HeadMounted ? "head" : "desk", 100.0 * fraction);
+    EXPECT_GT(fraction, 0.85);
+  }
+  // A later first pose: frame 0 is that pose, and the file loaded directly agrees.
+  o.scene.placement = CameraPlacement::DeskFacing;
+  o.poseStart = 500;
+  o.frameCount = 3;
+  Result<SyntheticSequence> shared = SyntheticSequence::create(o);
+  SynthOptions direct = o;
+  direct.poseAngles.reset();
+  Result<SyntheticSequence> loaded = SyntheticSequence::create(direct);
+  ASSERT_TRUE(shared.ok() && loaded.ok());
+  for (int f = 0; f < 3; ++f)
+    for (std::size_t i = 0; i < 21; ++i)
+      EXPECT_LT((shared->truth(f, 0).keypoints[i] - loaded->truth(f, 0).keypoints[i]).norm(),
+                2e-3f);
+}
+
 TEST(SyntheticSequence, AuthorsPoseFileWithoutTheirModelIsAnError) {
   const std::filesystem::path dir = test::scratchDir("synth_pose_no_model");
   std::ofstream(dir / "one.pose") << "0 0 0.4 0 0 0 1\n";

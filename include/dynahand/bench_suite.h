@@ -1,5 +1,9 @@
-// The standard accuracy and speed suite behind `dynahand bench` (docs/benchmarks.md):
-// every built-in motion clip x sensor profile x hand size, with ground-truth first-frame
+// The accuracy and speed suites behind `dynahand bench` (docs/benchmarks.md). The motion
+// suite (the headline numbers): every continuous segment of the original authors'
+// animbank.pose and the built-in clips at 2.5x speed, desk and head-mounted cameras, hands
+// shaped unlike the tracker's model, ground-truth and automatic starts, plus the whole
+// animbank played through its cuts (frames to re-acquire). The standard suite (regression
+// rows): the default clips x sensor profile x hand size, with ground-truth first-frame
 // initialisation and with automatic acquisition, plus ablations (each simulation strategy
 // off in turn, and "normal only"). Synthetic input with fixed seeds, so runs compare.
 #pragma once
@@ -7,12 +11,16 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "dynahand/metrics.h"
 #include "dynahand/model.h"
+#include "dynahand/model_pose.h"
+#include "dynahand/synth.h"
 #include "dynahand/tracker.h"
 
 namespace dynahand::eval {
@@ -42,6 +50,17 @@ struct SuiteItem {
   int frames = 0;
   float speed = 1.0f;      // clip time multiplier (0.5: half speed)
   std::uint64_t seed = 1;  // sensor noise
+
+  // Motion suite items (motionSuite); the standard suite leaves these at their defaults.
+  std::string group;  // row label; empty: the standard suite's "profile / size / init"
+  synth::CameraPlacement placement = synth::CameraPlacement::DeskFacing;
+  float proportionSpread = 0.0f;  // synth::randomProportions(proportionSeed, spread)
+  std::uint64_t proportionSeed = 0;
+  // Poses played instead of `clip` when set (synth::loadPoseAngles), from poseStart on;
+  // `clip` then names them (e.g. "animbank 428-965").
+  std::shared_ptr<const std::vector<model::JointAngles>> poses;
+  int poseStart = 0;
+  std::vector<int> cuts;  // frames (of this item) where the motion jumps: re-acquisition
 };
 
 struct SuiteOptions {
@@ -49,6 +68,32 @@ struct SuiteOptions {
   int frames = 0;      // frames per item; 0: 60 (quick: 8)
 };
 std::vector<SuiteItem> standardSuite(const SuiteOptions& options);
+
+// Where a pose sequence jumps (a cut between takes): frames i whose wrist keypoint moved more
+// than 4 cm, or any keypoint more than 5.5 cm, from frame i - 1 (in animbank the largest
+// move within a take is 4.3 cm). Keypoints of the default hand.
+inline constexpr float kCutWristM = 0.04f, kCutKeypointM = 0.055f;
+std::vector<int> findCuts(const std::vector<Keypoints21>& keypoints);
+
+struct MotionSuiteOptions {
+  bool quick = false;  // a few short items, for CI
+  int frames = 0;      // frames per clip item; 0: 90 (3 s; quick: 8)
+  // Folder holding intel/animbank.pose and intel/model_hand.json (../shared/data); empty or
+  // without the file: the animbank rows are skipped (MotionSuite::skipped says why).
+  std::filesystem::path data;
+};
+struct MotionSuite {
+  std::vector<SuiteItem> items;
+  std::string skipped;  // why the animbank rows are missing; empty when they are there
+  int animbankPoses = 0, animbankSegments = 0;
+};
+// The clips (all built-in one-hand clips at speed 2.5) x the four sensor profiles, the
+// animbank segments (each from its own first frame) on tof and active-stereo, each on the
+// desk and head-mounted cameras with gt and auto starts, and one continuous animbank item
+// per placement (tof, gt start); hand proportions spread 0.15, one seed per clip or segment.
+// Quick: pinch and wave on tof, 8 frames; the first two segments (8 frames) and the
+// continuous item over its first cut.
+Result<MotionSuite> motionSuite(const MotionSuiteOptions& options);
 
 inline constexpr double kAcquiredMaxJointMm = 30.0;  // "tracking" for frames-to-acquire
 
@@ -60,6 +105,9 @@ struct SuiteItemResult {
   std::vector<double> frameCpuMs;  // CPU time of that thread in track(), ms: on a loaded
                                    // machine wall time grows, CPU time much less
   int framesToAcquire = -1;        // first frame with max joint error <= 30 mm; -1: never
+  // Per item cut: frames from the cut to the first frame with max joint error <= 30 mm,
+  // -1 when that does not happen before the next cut (or the end).
+  std::vector<int> framesToReacquire;
 };
 
 // Synthesises and tracks one item on the calling thread.
@@ -85,12 +133,19 @@ struct SuiteRow {
   double meanFramesToAcquire = 0;  // over auto items that acquired
   int maxFramesToAcquire = -1;
   int neverAcquired = 0;
+  int cuts = 0;                        // cuts in the row's items
+  double medianFramesToReacquire = 0;  // over all cuts, never = infinitely many
+  int neverReacquired = 0;
 };
 std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results);
 
 // The table as fixed-width text (terminal) and as Markdown.
 std::string suiteTableText(const std::vector<SuiteRow>& rows);
 std::string suiteTableMarkdown(const std::vector<SuiteRow>& rows);
+// The motion suite's table (rows with a group label): mean / p95 error, frames within
+// 30 mm, frames to acquire (auto) and to re-acquire after cuts, p50 ms.
+std::string motionTableText(const std::vector<SuiteRow>& rows);
+std::string motionTableMarkdown(const std::vector<SuiteRow>& rows);
 // Mean error (mm) per clip for every ablation variant: what each strategy buys where.
 std::string ablationByClipMarkdown(const std::vector<SuiteItemResult>& results);
 

@@ -82,8 +82,9 @@ struct SynthOptions {
   // the original authors' .pose (their model's 21 keypoints fitted by model::KeypointFitter).
   // Frames past the file's end wrap around. Placement: `desk` keeps the file's camera
   // placement; `head` re-places the whole sequence rigidly (one transform for every frame)
-  // so that the first played pose's forearm lies at the head-mounted rest placement: the
-  // same motion, seen from the head-mounted camera.
+  // so that the mean forearm placement of the poses played (mean position, normalised mean
+  // quaternion) lies at the head-mounted rest placement: the same motion, seen from the
+  // head-mounted camera.
   std::filesystem::path poseFile;
   std::filesystem::path intelModelFile;  // for .pose; empty = model_hand.json beside it
   // Optional: the poses already loaded (loadPoseAngles for the same file and hand size), so

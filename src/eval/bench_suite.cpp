@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -23,13 +24,21 @@ namespace {
 constexpr int kDefaultFrames = 150;
 constexpr int kQuickFrames = 8;
 
+// Motion suite: frames per clip item (3 s: every one-hand clip at least once through at
+// 2.5x speed) and the clips' speed.
+constexpr int kMotionFrames = 90;
+constexpr float kMotionSpeed = 2.5f;
+constexpr float kMotionProportionSpread = 0.15f;
+
 std::string rowLabel(const SuiteItem& item) {
+  if (!item.group.empty()) return item.group;
   if (item.ablation) return "ablation: " + item.variant;
   return fmt::format("{} / {} / {}", item.profile, item.size.name, item.autoInit ? "auto" : "gt");
 }
 // The standard items the ablations are compared with.
 bool isAblationBaseline(const SuiteItem& item) {
-  return !item.ablation && item.profile == "tof" && item.size.name == "medium" && !item.autoInit;
+  return !item.ablation && item.group.empty() && item.profile == "tof" &&
+         item.size.name == "medium" && !item.autoInit;
 }
 
 double threadCpuMs() {
@@ -126,9 +135,156 @@ std::vector<SuiteItem> standardSuite(const SuiteOptions& options) {
   return items;
 }
 
+std::vector<int> findCuts(const std::vector<Keypoints21>& keypoints) {
+  std::vector<int> cuts;
+  for (std::size_t i = 1; i < keypoints.size(); ++i) {
+    const Keypoints21& a = keypoints[i - 1];
+    const Keypoints21& b = keypoints[i];
+    bool cut = (b[0] - a[0]).norm() > kCutWristM;
+    for (std::size_t k = 0; k < a.size() && !cut; ++k) cut = (b[k] - a[k]).norm() > kCutKeypointM;
+    if (cut) cuts.push_back(static_cast<int>(i));
+  }
+  return cuts;
+}
+
+namespace {
+
+// A stable seed from a name (FNV-1a): the same clip or segment gets the same hand shape in
+// every profile, placement and start, so rows compare like with like.
+std::uint64_t nameSeed(const std::string& name) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : name) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+const char* placementName(synth::CameraPlacement p) {
+  return p == synth::CameraPlacement::HeadMounted ? "head" : "desk";
+}
+
+}  // namespace
+
+Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
+  MotionSuite suite;
+  const HandSize medium = benchHandSizes()[1];
+  const int clipFrames =
+      options.frames > 0 ? options.frames : (options.quick ? kQuickFrames : kMotionFrames);
+  std::vector<std::string> clipNames;
+  for (const synth::ClipInfo& c : synth::clips())
+    if (c.handCount == 1) clipNames.push_back(c.name);
+  std::vector<std::string> profiles;
+  for (const auto& p : synth::sensorProfiles()) profiles.push_back(p.name);
+  if (options.quick) {
+    clipNames = {"pinch", "wave"};
+    profiles = {"tof"};
+  }
+  const synth::CameraPlacement placements[] = {synth::CameraPlacement::DeskFacing,
+                                               synth::CameraPlacement::HeadMounted};
+  for (std::size_t p = 0; p < profiles.size(); ++p) {
+    for (synth::CameraPlacement placement : placements) {
+      for (bool autoInit : {false, true}) {
+        for (std::size_t c = 0; c < clipNames.size(); ++c) {
+          SuiteItem item;
+          item.group = fmt::format("clips x{} / {} / {} / {}", kMotionSpeed, profiles[p],
+                                   placementName(placement), autoInit ? "auto" : "gt");
+          item.clip = clipNames[c];
+          item.profile = profiles[p];
+          item.size = medium;
+          item.autoInit = autoInit;
+          item.frames = clipFrames;
+          item.speed = kMotionSpeed;
+          item.seed = 1 + c + 10 * p;
+          item.placement = placement;
+          item.proportionSpread = kMotionProportionSpread;
+          item.proportionSeed = nameSeed(item.clip);
+          suite.items.push_back(std::move(item));
+        }
+      }
+    }
+  }
+
+  // The animbank: segments between cuts, and the whole file through its cuts.
+  const std::filesystem::path file = options.data / "intel" / "animbank.pose";
+  std::error_code ec;
+  if (options.data.empty() || !std::filesystem::is_regular_file(file, ec)) {
+    suite.skipped = "animbank rows skipped: " + (options.data.empty()
+                                                     ? std::string("no data folder (--data DIR)")
+                                                     : file.string() + " not found");
+    return suite;
+  }
+  synth::SynthOptions load;
+  load.poseFile = file;
+  load.hand = medium.dimensions;
+  Result<std::vector<model::JointAngles>> angles = synth::loadPoseAngles(load);
+  if (!angles) return Error{"animbank: " + angles.message()};
+  const model::ArticulatedModel hand = model::makeDefaultHand(medium.dimensions);
+  std::vector<Keypoints21> keypoints;
+  keypoints.reserve(angles->size());
+  for (const model::JointAngles& a : *angles)
+    keypoints.push_back(model::keypoints21(hand, model::forwardKinematics(hand, a)));
+  const std::vector<int> cuts = findCuts(keypoints);
+  const int poseCount = static_cast<int>(angles->size());
+  const auto poses = std::make_shared<const std::vector<model::JointAngles>>(std::move(*angles));
+  suite.animbankPoses = poseCount;
+  std::vector<int> bounds = {0};
+  bounds.insert(bounds.end(), cuts.begin(), cuts.end());
+  bounds.push_back(poseCount);
+  suite.animbankSegments = static_cast<int>(bounds.size()) - 1;
+
+  std::vector<std::string> animProfiles = {"tof", "active-stereo"};
+  if (options.quick) animProfiles = {"tof"};
+  const int segmentsUsed =
+      options.quick ? std::min(2, suite.animbankSegments) : suite.animbankSegments;
+  for (std::size_t p = 0; p < animProfiles.size(); ++p) {
+    for (synth::CameraPlacement placement : placements) {
+      for (bool autoInit : {false, true}) {
+        for (int g = 0; g < segmentsUsed; ++g) {
+          const int first = bounds[static_cast<std::size_t>(g)];
+          const int end = bounds[static_cast<std::size_t>(g) + 1];
+          SuiteItem item;
+          item.group = fmt::format("animbank segments / {} / {} / {}", animProfiles[p],
+                                   placementName(placement), autoInit ? "auto" : "gt");
+          item.clip = fmt::format("animbank {}-{}", first, end - 1);
+          item.profile = animProfiles[p];
+          item.size = medium;
+          item.autoInit = autoInit;
+          item.frames = options.quick ? std::min(end - first, kQuickFrames) : end - first;
+          item.seed = 1000 + static_cast<std::uint64_t>(g) + 100 * p;
+          item.placement = placement;
+          item.proportionSpread = kMotionProportionSpread;
+          item.proportionSeed = nameSeed(item.clip);
+          item.poses = poses;
+          item.poseStart = first;
+          suite.items.push_back(std::move(item));
+        }
+      }
+    }
+  }
+  for (synth::CameraPlacement placement : placements) {
+    SuiteItem item;
+    item.group = fmt::format("animbank continuous / tof / {} / gt", placementName(placement));
+    item.clip = "animbank";
+    item.profile = "tof";
+    item.size = medium;
+    item.frames = options.quick && !cuts.empty() ? std::min(poseCount, cuts[0] + 10) : poseCount;
+    item.seed = 2000;
+    item.placement = placement;
+    item.proportionSpread = kMotionProportionSpread;
+    item.proportionSeed = nameSeed(item.clip);
+    item.poses = poses;
+    for (int c : cuts)
+      if (c < item.frames) item.cuts.push_back(c);
+    suite.items.push_back(std::move(item));
+  }
+  return suite;
+}
+
 Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   synth::SynthOptions so;
   so.clip = item.clip;
+  so.scene.placement = item.placement;
+  so.proportions = synth::randomProportions(item.proportionSeed, item.proportionSpread);
+  so.poseAngles = item.poses;
+  so.poseStart = item.poseStart;
   so.profile = item.profile;
   so.frameCount = item.frames;
   so.seed = item.seed;
@@ -158,12 +314,28 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   auto metrics = computeKeypointMetrics(result.keypoints);
   if (!metrics) return Error{metrics.message()};
   result.metrics = std::move(*metrics);
-  for (std::size_t f = 0; f < result.metrics.perFrameMaxMm.size(); ++f) {
-    const double maxMm = result.metrics.perFrameMaxMm[f];
-    if (!std::isnan(maxMm) && maxMm <= kAcquiredMaxJointMm) {
+  const std::vector<double>& maxMm = result.metrics.perFrameMaxMm;
+  const auto within = [&](std::size_t f) {
+    return !std::isnan(maxMm[f]) && maxMm[f] <= kAcquiredMaxJointMm;
+  };
+  for (std::size_t f = 0; f < maxMm.size(); ++f) {
+    if (within(f)) {
       result.framesToAcquire = static_cast<int>(f);
       break;
     }
+  }
+  for (std::size_t c = 0; c < item.cuts.size(); ++c) {
+    const auto from = static_cast<std::size_t>(item.cuts[c]);
+    const std::size_t to =
+        c + 1 < item.cuts.size() ? static_cast<std::size_t>(item.cuts[c + 1]) : maxMm.size();
+    int frames = -1;
+    for (std::size_t f = from; f < std::min(to, maxMm.size()); ++f) {
+      if (within(f)) {
+        frames = static_cast<int>(f - from);
+        break;
+      }
+    }
+    result.framesToReacquire.push_back(frames);
   }
   return result;
 }
@@ -213,7 +385,10 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
     groups[label].push_back(&r);
   };
   for (const auto& r : results) {
-    if (!r.item.ablation) add(rowLabel(r.item), r);
+    if (!r.item.group.empty()) add(rowLabel(r.item), r);
+  }
+  for (const auto& r : results) {
+    if (!r.item.ablation && r.item.group.empty()) add(rowLabel(r.item), r);
   }
   for (const auto& r : results) {
     if (isAblationBaseline(r.item)) add("ablation: all (= tof / medium / gt)", r);
@@ -229,6 +404,7 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
     std::vector<double> times, cpuTimes;
     double acquireSum = 0;
     int acquired = 0;
+    std::vector<double> reacquire;  // never: infinity
     for (const SuiteItemResult* r : groups[label]) {
       ++row.items;
       all.groundTruth.insert(all.groundTruth.end(), r->keypoints.groundTruth.begin(),
@@ -237,6 +413,11 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
                            r->keypoints.predicted.end());
       times.insert(times.end(), r->frameMs.begin(), r->frameMs.end());
       cpuTimes.insert(cpuTimes.end(), r->frameCpuMs.begin(), r->frameCpuMs.end());
+      for (int frames : r->framesToReacquire) {
+        ++row.cuts;
+        if (frames < 0) ++row.neverReacquired;
+        reacquire.push_back(frames < 0 ? std::numeric_limits<double>::infinity() : frames);
+      }
       if (r->item.autoInit) {
         ++row.autoItems;
         if (r->framesToAcquire < 0) {
@@ -261,6 +442,12 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
     for (double t : times) totalMs += t;
     row.framesPerSecond = totalMs > 0 ? 1000.0 * row.frames / totalMs : 0.0;
     row.meanFramesToAcquire = acquired > 0 ? acquireSum / acquired : 0.0;
+    if (!reacquire.empty()) {
+      std::sort(reacquire.begin(), reacquire.end());
+      const std::size_t n = reacquire.size();
+      row.medianFramesToReacquire =
+          n % 2 == 1 ? reacquire[n / 2] : 0.5 * (reacquire[n / 2 - 1] + reacquire[n / 2]);
+    }
     rows.push_back(row);
   }
   return rows;
@@ -277,6 +464,47 @@ std::string acquireText(const SuiteRow& r) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string reacquireText(const SuiteRow& r) {
+  if (r.cuts == 0) return "-";
+  std::string s = std::isinf(r.medianFramesToReacquire)
+                      ? std::string("never")
+                      : fmt::format("{:g}", r.medianFramesToReacquire);
+  s += fmt::format(" / {} cuts", r.cuts);
+  if (r.neverReacquired > 0) s += fmt::format(", {} never", r.neverReacquired);
+  return s;
+}
+
+}  // namespace
+
+std::string motionTableText(const std::vector<SuiteRow>& rows) {
+  std::string s = fmt::format("{:<44} {:>5} {:>6} {:>8} {:>8} {:>7} {:>16} {:>22} {:>7}\n",
+                              "motion row", "items", "frames", "mean mm", "p95 mm", "<=30mm",
+                              "acquire mean/max", "re-acquire median", "p50 ms");
+  for (const auto& r : rows) {
+    s += fmt::format("{:<44} {:>5} {:>6} {:>8.1f} {:>8.1f} {:>6.1f}% {:>16} {:>22} {:>7.2f}\n",
+                     r.label, r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30,
+                     acquireText(r), reacquireText(r), r.p50Ms);
+  }
+  return s;
+}
+
+std::string motionTableMarkdown(const std::vector<SuiteRow>& rows) {
+  std::string s =
+      "| motion row | items | frames | mean error (mm) | p95 (mm) | frames max joint <= 30 mm | "
+      "auto init: frames to acquire (mean / max) | frames to re-acquire after a cut (median / "
+      "cuts) | "
+      "p50 ms |\n"
+      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+  for (const auto& r : rows) {
+    s += fmt::format("| {} | {} | {} | {:.1f} | {:.1f} | {:.1f}% | {} | {} | {:.2f} |\n", r.label,
+                     r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30, acquireText(r),
+                     reacquireText(r), r.p50Ms);
+  }
+  return s;
+}
 
 std::string suiteTableText(const std::vector<SuiteRow>& rows) {
   std::string s =

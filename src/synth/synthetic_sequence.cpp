@@ -90,6 +90,25 @@ Result<std::vector<model::JointAngles>> loadPlayback(const SynthOptions& o,
   return angles;
 }
 
+// The mean root (forearm) placement of the poses frame 0..count-1 plays (from `start`,
+// wrapping; each pose once): mean wrist position and the normalised mean of the
+// quaternions, each on the first one's side.
+Pose meanPlacement(const std::vector<model::JointAngles>& poses, int start, int count) {
+  const std::size_t n = std::min(poses.size(), static_cast<std::size_t>(count));
+  Vec3 position = Vec3::Zero();
+  Eigen::Vector4f q = Eigen::Vector4f::Zero();
+  const Quat& reference = poses[static_cast<std::size_t>(start) % poses.size()].root.q;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Pose& root = poses[(static_cast<std::size_t>(start) + i) % poses.size()].root;
+    position += root.p;
+    q += (root.q.dot(reference) < 0.0f ? -1.0f : 1.0f) * root.q.coeffs();
+  }
+  Pose mean;
+  mean.p = position / static_cast<float>(n);
+  mean.q = Quat(q.w(), q.x(), q.y(), q.z()).normalized();
+  return mean;
+}
+
 }  // namespace
 
 Result<std::vector<model::JointAngles>> loadPoseAngles(const SynthOptions& options, int maxPoses) {
@@ -194,11 +213,11 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
   const float handDistance = detail::resolvedHandDistance(options.scene, state->profile);
   state->rest = detail::restPlacement(options.scene.placement, handDistance);
   if (state->playback && options.scene.placement == CameraPlacement::HeadMounted) {
-    // One rigid transform for the whole sequence: the first played pose's forearm onto the
-    // head-mounted rest placement (desk keeps the file's own camera placement).
-    const model::JointAngles& first =
-        (*state->playback)[static_cast<std::size_t>(options.poseStart) % state->playback->size()];
-    state->playbackPlacement = state->rest * first.root.inverse();
+    // One rigid transform for the whole sequence: the mean forearm placement of the poses
+    // played onto the head-mounted rest placement (desk keeps the file's own placement).
+    state->playbackPlacement =
+        state->rest *
+        meanPlacement(*state->playback, options.poseStart, options.frameCount).inverse();
   }
   const detail::SceneGeometry geometry = detail::sceneGeometry(options.scene, handDistance);
   state->renderer.setBackground(geometry.planes, geometry.solids);

@@ -1,0 +1,110 @@
+// The motion suite: cut detection, its composition, re-acquisition after cuts, and a tiny
+// run (--quick) end to end; the animbank rows need ../shared/data and are skipped without it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "dynahand/bench_suite.h"
+#include "dynahand/synth.h"
+#include "test_support.h"
+
+namespace dynahand::eval {
+namespace {
+
+Keypoints21 handAt(const Vec3& offset) {
+  Keypoints21 k;
+  for (std::size_t i = 0; i < k.size(); ++i)
+    k[i] =
+        offset + Vec3(0.01f * static_cast<float>(i % 5), 0.02f * static_cast<float>(i / 5), 0.4f);
+  return k;
+}
+
+TEST(MotionSuite, CutsAreWhereTheWristOrAnyKeypointJumps) {
+  std::vector<Keypoints21> frames;
+  for (int i = 0; i < 10; ++i) frames.push_back(handAt(Vec3(0.01f * static_cast<float>(i), 0, 0)));
+  frames.push_back(handAt(Vec3(0.2f, 0, 0)));  // frame 10: the wrist jumps 11 cm
+  frames.push_back(handAt(Vec3(0.2f, 0, 0)));
+  Keypoints21 finger = frames.back();
+  finger[8] += Vec3(0.0f, 0.06f, 0.0f);  // frame 12: one fingertip jumps 6 cm
+  frames.push_back(finger);
+  EXPECT_EQ(findCuts(frames), (std::vector<int>{10, 12}));
+  EXPECT_TRUE(findCuts({}).empty());
+}
+
+TEST(MotionSuite, ClipsOnEveryProfileAndPlacementWithVariedHands) {
+  const Result<MotionSuite> suite = motionSuite({});
+  ASSERT_TRUE(suite.ok()) << suite.message();
+  EXPECT_NE(suite->skipped.find("animbank rows skipped"), std::string::npos);
+  int oneHandClips = 0;
+  for (const synth::ClipInfo& c : synth::clips()) oneHandClips += c.handCount == 1;
+  EXPECT_EQ(static_cast<int>(suite->items.size()), oneHandClips * 4 * 2 * 2);
+  std::set<std::string> groups;
+  for (const SuiteItem& item : suite->items) {
+    groups.insert(item.group);
+    EXPECT_EQ(item.speed, 2.5f);
+    EXPECT_EQ(item.proportionSpread, 0.15f);
+    EXPECT_EQ(item.frames, 90);
+    EXPECT_TRUE(item.cuts.empty());
+  }
+  EXPECT_EQ(groups.size(), 4u * 2u * 2u);
+  EXPECT_TRUE(groups.contains("clips x2.5 / structured-light / head / auto"));
+  // The same clip gets the same hand shape in every row; different clips differ.
+  const auto seedOf = [&](const std::string& clip, const std::string& profile) {
+    for (const SuiteItem& item : suite->items)
+      if (item.clip == clip && item.profile == profile) return item.proportionSeed;
+    return std::uint64_t{0};
+  };
+  EXPECT_EQ(seedOf("wave", "tof"), seedOf("wave", "active-stereo"));
+  EXPECT_NE(seedOf("wave", "tof"), seedOf("pinch", "tof"));
+}
+
+TEST(MotionSuite, ReacquisitionIsCountedFromEachCutUntilTheNext) {
+  SuiteItem item;
+  item.group = "continuous";
+  SuiteItemResult a, b;
+  a.item = b.item = item;
+  a.framesToReacquire = {0, 4, -1};
+  b.framesToReacquire = {2};
+  a.frameMs = b.frameMs = {1.0};
+  a.frameCpuMs = b.frameCpuMs = {1.0};
+  const std::vector<SuiteRow> rows = summarizeSuite({a, b});
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].cuts, 4);
+  EXPECT_EQ(rows[0].neverReacquired, 1);
+  EXPECT_DOUBLE_EQ(rows[0].medianFramesToReacquire, 3.0);  // 0 2 | 4 never
+  const std::string table = motionTableMarkdown(rows);
+  EXPECT_NE(table.find("| 3 / 4 cuts, 1 never |"), std::string::npos) << table;
+}
+
+TEST(MotionSuite, QuickSuiteRunsEndToEnd) {
+  MotionSuiteOptions options;
+  options.quick = true;
+  options.data = test::sharedDataDir();
+  const Result<MotionSuite> suite = motionSuite(options);
+  ASSERT_TRUE(suite.ok()) << suite.message();
+  const Result<std::vector<SuiteItemResult>> results = runSuite(suite->items, 2, {});
+  ASSERT_TRUE(results.ok()) << results.message();
+  ASSERT_EQ(results->size(), suite->items.size());
+  const std::vector<SuiteRow> rows = summarizeSuite(*results);
+  for (const SuiteRow& row : rows) {
+    EXPECT_GT(row.frames, 0) << row.label;
+    EXPECT_TRUE(std::isfinite(row.meanMm)) << row.label;
+  }
+  const std::string text = motionTableText(rows);
+  EXPECT_NE(text.find("clips x2.5 / tof / head / gt"), std::string::npos) << text;
+  if (!suite->skipped.empty())
+    GTEST_SKIP() << suite->skipped << " (../shared/data not found; set DYNAHAND_SHARED_DIR)";
+  EXPECT_GE(suite->animbankSegments, 10);
+  EXPECT_EQ(suite->animbankPoses, 2336);
+  const auto continuous = std::find_if(rows.begin(), rows.end(), [](const SuiteRow& r) {
+    return r.label == "animbank continuous / tof / head / gt";
+  });
+  ASSERT_NE(continuous, rows.end()) << text;
+  EXPECT_EQ(continuous->cuts, 1);
+  EXPECT_NE(text.find("animbank segments / tof / desk / auto"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace dynahand::eval

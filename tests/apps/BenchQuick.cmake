@@ -8,7 +8,7 @@ message(STATUS "${out}")
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "dynahand bench --quick failed (${rc})")
 endif()
-foreach(row "tof / medium / gt" "structured-light / medium / auto" "ablation: all" "ablation: no normal"
+foreach(row "clips x2.5 / tof / head / auto" "tof / medium / gt" "structured-light / medium / auto" "ablation: all" "ablation: no normal"
             "ablation: no feature_detection" "ablation: normal only")
   if(NOT out MATCHES "${row}")
     message(FATAL_ERROR "the table has no row '${row}'")
@@ -37,8 +37,10 @@ if(p50 LESS_EQUAL 0)
   message(FATAL_ERROR "p50 frame time ${p50} ms is not positive")
 endif()
 file(READ ${WORK_DIR}/benchmarks.md md)
-foreach(text "# Benchmarks" "Command: `dynahand bench --quick --threads 2`" "Machine: " "Date: "
-             "| tof / medium / gt | 2 | 16 |" "## Ablations by clip" "| pinch |")
+foreach(text "# Benchmarks" "Command: `dynahand bench --quick --threads 2`" "Machine: "
+             "## Motion suite" "| clips x2.5 / tof / desk / gt | 2 | 16 |"
+             "## Standard suite (regression rows)" "| tof / medium / gt | 2 | 16 |"
+             "### Ablations by clip" "| pinch |")
   string(FIND "${md}" "${text}" at)
   if(at LESS 0)
     message(FATAL_ERROR "benchmarks.md lacks '${text}'")

@@ -22,3 +22,11 @@ if(DynahandOpenCV_FOUND AND DynahandOpenCV_videoio_LIBRARY AND NOT TARGET Dynaha
   set_target_properties(DynahandOpenCV::VideoIO PROPERTIES
     INTERFACE_LINK_LIBRARIES "${DynahandOpenCV_videoio_LIBRARY};DynahandOpenCV::OpenCV")
 endif()
+
+# The learned detector's inference (libopencv-dnn-dev): DynahandOpenCV::DNN.
+find_library(DynahandOpenCV_dnn_LIBRARY opencv_dnn)
+if(DynahandOpenCV_FOUND AND DynahandOpenCV_dnn_LIBRARY AND NOT TARGET DynahandOpenCV::DNN)
+  add_library(DynahandOpenCV::DNN INTERFACE IMPORTED)
+  set_target_properties(DynahandOpenCV::DNN PROPERTIES
+    INTERFACE_LINK_LIBRARIES "${DynahandOpenCV_dnn_LIBRARY};DynahandOpenCV::OpenCV")
+endif()

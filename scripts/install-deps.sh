@@ -7,6 +7,8 @@ packages=(
   build-essential cmake ninja-build pkgconf ccache
   libeigen3-dev libqhull-dev libccd-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-videoio-dev
+  libopencv-dnn-dev               # the learned detector's inference (ONNX through OpenCV DNN)
+  python3-numpy python3-torch python3-onnx  # the detector's training script (train/), Debian's /usr/bin/python3
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # scripts/test.sh checks the sources' formatting

@@ -28,6 +28,8 @@ struct TrackOptions {
   int hands = 1, threads = 1, start = 0, frames = -1;
   bool perFrame = false, candidates = false;
   std::vector<std::string> disable;
+  bool noDetector = false;  // --no-detector
+  std::string detector;     // --detector FILE (empty: the shipped weights)
 };
 
 // camera:N opens the N-th camera DepthCamera::list() finds; camera:BACKEND[:ID] a given one.
@@ -96,6 +98,10 @@ int runTrack(const TrackOptions& o) {
   settings.perFrame = o.perFrame;
   settings.threads = o.threads;
   settings.keepCandidates = o.candidates;
+  settings.detector.enabled = !o.noDetector;
+  settings.detector.weights = o.detector;
+  if (o.noDetector && !o.detector.empty())
+    throw UsageError("--detector and --no-detector are exclusive");
   for (const auto& name : o.disable) {
     bool found = false;
     for (int k = 0; k < track::kStrategyCount; ++k) {
@@ -320,7 +326,12 @@ const CommandRegistration kTrackCommand{Command{
                    "write every simulation's error and pose into the JSON lines (for render)");
       sub.add_option("--disable", o->disable,
                      "simulations to switch off: normal, gross_motion, grasp_bias, finger_flip, "
-                     "feature_detection");
+                     "feature_detection, detector_fit");
+      sub.add_option("--detector", o->detector,
+                     "learned keypoint detector weights (ONNX; default: the shipped "
+                     "models/detector/detector.onnx, or $DYNAHAND_DETECTOR)");
+      sub.add_flag("--no-detector", o->noDetector,
+                   "track without the learned detector (the paper's simulations only)");
       sub.footer(
           "Examples:\n"
           "  dynahand track clip/ --out poses.jsonl\n"

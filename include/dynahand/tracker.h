@@ -22,13 +22,40 @@ namespace dynahand::track {
 
 using Keypoints21 = std::array<Vec3, 21>;
 
-// The simulations run every frame (paper: "Multiple Simulations and Error").
-enum class StrategyKind : int { Normal = 0, GrossMotion, GraspBias, FingerFlip, FeatureDetection };
-inline constexpr int kStrategyCount = 5;
+// The simulations run every frame (paper: "Multiple Simulations and Error"). DetectorFit
+// starts from the model fitted to the learned detector's keypoints (beyond the paper).
+enum class StrategyKind : int {
+  Normal = 0,
+  GrossMotion,
+  GraspBias,
+  FingerFlip,
+  FeatureDetection,
+  DetectorFit
+};
+inline constexpr int kStrategyCount = 6;
 const char* strategyName(StrategyKind kind);  // "normal", "gross_motion", ...
 
+// The learned keypoint detector (dynahand/detector.h) and how the tracker uses it.
+struct DetectorSettings {
+  bool enabled = true;  // run it every frame (when weights are found)
+  // ONNX weights; empty: detect::defaultDetectorFile() (the shipped ones), and without any
+  // the tracker runs without a detector. A file given here that does not load is an error.
+  std::string weights;
+  // Keypoints below this confidence ([0, 1]) are not used by the strategies.
+  float minConfidence = 0.4f;
+  // The detector-fit simulation, acquisition and the loss test run when the detection's mean
+  // confidence reaches this.
+  float minMeanConfidence = 0.45f;
+  // Loss test: the tracked hand is replaced by the detector-fit simulation when its keypoints
+  // stay farther than this (m, mean over confident keypoints) from the detector's for
+  // disagreeFrames frames in a row.
+  float disagreeDistanceM = 0.035f;
+  int disagreeFrames = 4;
+};
+
 struct TrackerSettings {
-  CloudConfig cloud;  // filtering, segmentation, voxel size, planes
+  CloudConfig cloud;
+  DetectorSettings detector;  // filtering, segmentation, voxel size, planes
   // The segmentation ball (cloud.segmentation.handRadiusM) is set for the reference hand
   // (model::HandDimensions{}, 0.19 m long); a longer model hand scales it up in proportion,
   // or a hand whose nearest point is a fingertip loses its far fingertips to the ball.
@@ -129,7 +156,16 @@ struct HandResult {
   FitQuality quality;            // of the reported pose (valid when tracked)
   StrategyKind simulation = StrategyKind::Normal;
   bool acquired = false;  // this frame (re)acquired the hand from scratch
-  int pointCount = 0;     // sample points used
+  // The learned detector's keypoints this frame (MediaPipe order, m) and confidences; all
+  // zero when it did not run.
+  bool detected = false;
+  Keypoints21 detectorKeypoints21{};
+  std::array<float, 21> detectorConfidence{};
+  // Mean distance of the reported keypoints from the detector's confident ones (m), and the
+  // frames in a row it has exceeded DetectorSettings::disagreeDistanceM.
+  float detectorDisagreement = 0.0f;
+  int disagreeingFrames = 0;
+  int pointCount = 0;  // sample points used
   std::vector<Candidate> candidates;
 };
 

@@ -105,6 +105,21 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
     fmt::format_to(std::back_inserter(s), ",\"simulation\":\"{}\",\"acquired\":{},\"points\":{}",
                    track::strategyName(hand.simulation), hand.acquired ? "true" : "false",
                    hand.pointCount);
+    if (hand.detected) {
+      s += ",\"detector\":{\"keypoints21\":[";
+      for (std::size_t k = 0; k < hand.detectorKeypoints21.size(); ++k) {
+        if (k > 0) s += ',';
+        appendVec(s, hand.detectorKeypoints21[k]);
+      }
+      s += "],\"confidence\":[";
+      for (std::size_t k = 0; k < hand.detectorConfidence.size(); ++k) {
+        if (k > 0) s += ',';
+        appendNumber(s, hand.detectorConfidence[k]);
+      }
+      s += "],\"disagreement\":";
+      appendNumber(s, hand.detectorDisagreement);
+      fmt::format_to(std::back_inserter(s), ",\"disagreeing_frames\":{}}}", hand.disagreeingFrames);
+    }
     if (hand.tracked) {
       s += ",\"fit\":{\"data_near_model\":";
       appendNumber(s, hand.quality.dataNearModel);

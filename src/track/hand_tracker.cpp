@@ -12,6 +12,10 @@ namespace dynahand::track {
 namespace {
 
 constexpr int kMinPoints = 20;  // fewer sample points: no hand in view
+// A detected keypoint, bound to its body, pulls like this many samples (times its
+// confidence).
+constexpr float kDetectorLabelCap = 8.0f;
+constexpr std::size_t kMinFitKeypoints = 8;  // fewer confident keypoints: no fitted pose
 
 // The hand's own world (acquisition steps it); the simulations' copies take the tracking
 // sweeps (HandTracker's constructor).
@@ -62,7 +66,8 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
         every.pullForce = settings.acquisitionPullForce;
         return every;
       }()),
-      pool_(pool) {
+      pool_(pool),
+      fitter_(model) {
   // Room for every row a frame can make: points + labels + boundary rows.
   const int rows = settings_.cloud.maxVoxels + 64 + 17 * settings_.cloud.planes.planeCount;
   rig_.world().reserveRows(rows);
@@ -106,6 +111,81 @@ void HandTracker::reset() {
   tracked_ = false;
   badFrames_ = 0;
   lastWinner_ = -1;
+  disagreeFrames_ = 0;
+}
+
+void HandTracker::prepareDetectorEvidence(const HandFrame& frame) {
+  detectorLabels_.clear();
+  confidentKeypoints_.clear();
+  haveDetectorPose_ = false;
+  keypoints_ = nullptr;
+  const detect::DetectedKeypoints* d = frame.keypoints;
+  const DetectorSettings& s = settings_.detector;
+  if (d == nullptr || !d->valid || d->meanConfidence < s.minMeanConfidence) return;
+  fitIndices_.clear();
+  fitTargets_.clear();
+  const auto& indices = model_->keypoints21Indices();
+  for (std::size_t i = 0; i < indices.size(); ++i) {
+    if (d->confidence[i] < s.minConfidence) continue;
+    confidentKeypoints_.push_back(static_cast<int>(i));
+    fitIndices_.push_back(indices[i]);
+    fitTargets_.push_back(d->points[i]);
+    const int body = model_->keypoints()[static_cast<std::size_t>(indices[i])].body;
+    detectorLabels_.push_back(
+        {d->points[i], BodyMask{1} << body, kDetectorLabelCap * d->confidence[i]});
+  }
+  if (fitIndices_.size() < kMinFitKeypoints) {
+    detectorLabels_.clear();
+    confidentKeypoints_.clear();
+    return;
+  }
+  keypoints_ = d;
+  Result<model::FitResult> fit = fitter_.fit(fitIndices_, fitTargets_);
+  if (!fit) return;
+  model::forwardKinematicsInto(*model_, fit->angles, detectorPose_);
+  haveDetectorPose_ = true;
+}
+
+float HandTracker::detectorDistance(const Keypoints21& keypoints) const {
+  if (keypoints_ == nullptr || confidentKeypoints_.empty()) return 0.0f;
+  float sum = 0.0f;
+  for (const int i : confidentKeypoints_)
+    sum +=
+        (keypoints[static_cast<std::size_t>(i)] - keypoints_->points[static_cast<std::size_t>(i)])
+            .norm();
+  return sum / static_cast<float>(confidentKeypoints_.size());
+}
+
+const HandTracker::Lane* HandTracker::checkAgainstDetector(const HandFrame& frame,
+                                                           const Lane* best) {
+  disagreement_ = 0.0f;
+  if (best == nullptr || keypoints_ == nullptr) {
+    disagreeFrames_ = 0;
+    return best;
+  }
+  model::ModelPose& pose = pose_;
+  best->rig.readPose(pose);
+  scratchKeypoints_ = model::keypoints21(*model_, pose);
+  disagreement_ = detectorDistance(scratchKeypoints_);
+  disagreeFrames_ = disagreement_ > settings_.detector.disagreeDistanceM ? disagreeFrames_ + 1 : 0;
+  if (disagreeFrames_ < settings_.detector.disagreeFrames) return best;
+  for (const auto& lane : lanes_) {
+    if (lane->candidate.kind != StrategyKind::DetectorFit || !lane->candidate.ran ||
+        lane.get() == best)
+      continue;
+    // Replaced: the detector-fit simulation's state, measured in full for the result.
+    Lane& replacement = *lane;
+    evaluate(replacement.simulator, replacement.rig, frame,
+             metricHints(replacement.simulator, replacement.metricHints), replacement.posed,
+             replacement.error);
+    replacement.candidate.error = replacement.error.total;
+    replacement.rig.readPose(pose);
+    scratchKeypoints_ = model::keypoints21(*model_, pose);
+    disagreement_ = detectorDistance(scratchKeypoints_);
+    disagreeFrames_ = 0;
+    return &replacement;
+  }
+  return best;
 }
 
 bool HandTracker::evaluate(Simulator& simulator, const HandRig& rig, const HandFrame& frame,
@@ -217,12 +297,23 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     out.error = 0.0f;
     return;
   }
+  prepareDetectorEvidence(frame);
   if (!tracked_ || settings_.perFrame) {
     acquire(frame, out);
   } else {
     runStrategies(frame, out);
   }
   fillResult(out);
+  out.detected = keypoints_ != nullptr;
+  if (frame.keypoints != nullptr && frame.keypoints->valid) {
+    out.detectorKeypoints21 = frame.keypoints->points;
+    out.detectorConfidence = frame.keypoints->confidence;
+  } else {
+    out.detectorKeypoints21.fill(Vec3::Zero());
+    out.detectorConfidence.fill(0.0f);
+  }
+  out.detectorDisagreement = keypoints_ != nullptr ? detectorDistance(out.keypoints21) : 0.0f;
+  out.disagreeingFrames = disagreeFrames_;
   if (out.tracked && frame.cloud != nullptr) {
     simulator_.pose(rig_, posed_);
     std::array<Vec3, 5> tips;
@@ -265,8 +356,11 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   // detector's) share that step's rows too.
   simulator_.prepareFrameStartRows(rig_, laneInput);
   auto contextOf = [&](Lane& lane) {
-    return StrategyContext{lane.rig,   lane.simulator,        laneInput,       settings_.substeps,
-                           frame.time, settings_.flipPeriodS, frame.detection, &startAngles_};
+    return StrategyContext{lane.rig,        lane.simulator,
+                           laneInput,       settings_.substeps,
+                           frame.time,      settings_.flipPeriodS,
+                           frame.detection, &startAngles_,
+                           detectorLabels_, haveDetectorPose_ ? &detectorPose_ : nullptr};
   };
   auto startLane = [&](Lane& lane) {
     lane.rig.world().restoreState(start_);
@@ -329,6 +423,14 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
     }
     out.candidates.push_back(lane.candidate);
   }
+  if (const Lane* kept = checkAgainstDetector(frame, best); kept != best) {
+    best = kept;
+    bestError = kept->candidate.error;
+    bestKind = kept->candidate.kind;
+    lastWinner_ = -1;
+    for (auto& c : out.candidates)
+      if (c.kind == bestKind) c.error = bestError;
+  }
   if (best != nullptr) {
     world.restoreState(best->rig.world().state());
     bestBreakdown_ = best->error;
@@ -388,8 +490,10 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   struct Start {
     Vec2 axis, thumb;
     bool labelled;
+    bool fitted = false;  // the pose fitted to the learned detector's keypoints
   };
   std::vector<Start> starts;
+  if (haveDetectorPose_) starts.push_back({Vec2::Zero(), Vec2::Zero(), false, true});
   const float mirror = side_ == model::Side::Right ? 1.0f : -1.0f;
   const bool detected = frame.detection != nullptr && frame.detection->fired;
   if (detected) {
@@ -401,7 +505,7 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   float bestError = std::numeric_limits<float>::infinity();
   std::vector<LabelledPoint> labels;
   for (const Start& s : starts) {
-    rig_.setPose(canonicalPose(frame, s.axis, s.thumb));
+    rig_.setPose(s.fitted ? detectorPose_ : canonicalPose(frame, s.axis, s.thumb));
     FrameInput input{frame.points, frame.planes, {}, frame.cloud, nullptr, {}};
     int steps = settings_.acquisitionSubsteps;
     if (s.labelled) {
@@ -418,7 +522,9 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
     }
     acquisitionSimulator_.run(rig_, input, steps);
     Candidate candidate;
-    candidate.kind = s.labelled ? StrategyKind::FeatureDetection : StrategyKind::Normal;
+    candidate.kind = s.fitted     ? StrategyKind::DetectorFit
+                     : s.labelled ? StrategyKind::FeatureDetection
+                                  : StrategyKind::Normal;
     candidate.ran = true;
     candidate.error = evaluate(acquisitionSimulator_, frame);
     if (candidate.error < bestError) {

@@ -9,6 +9,8 @@
 #include <span>
 #include <vector>
 
+#include "dynahand/detector.h"
+#include "dynahand/model_fit.h"
 #include "dynahand/tracker.h"
 #include "track/error_metric.h"
 #include "track/finger_detector.h"
@@ -24,7 +26,9 @@ struct HandFrame {
   std::span<const BoundaryPlane> planes;
   const CloudFrame* cloud = nullptr;
   const FingerDetection* detection = nullptr;  // nullptr or not fired: none
-  double time = 0.0;                           // sequence time, s
+  // The learned detector's keypoints for this hand (camera frame); nullptr: none.
+  const detect::DetectedKeypoints* keypoints = nullptr;
+  double time = 0.0;  // sequence time, s
 };
 
 class HandTracker {
@@ -62,6 +66,11 @@ class HandTracker {
   model::ModelPose canonicalPose(const HandFrame& frame, const Vec2& axisImage,
                                  const Vec2& thumbSideImage) const;
   void fillResult(HandResult& out);
+  // The learned detector's evidence of this frame (detectorLabels_, detectorPose_): its
+  // confident keypoints and the model fitted to them; none below the confidence settings.
+  void prepareDetectorEvidence(const HandFrame& frame);
+  // Mean distance (m) of `keypoints` from the detector's confident ones.
+  float detectorDistance(const Keypoints21& keypoints) const;
 
   const model::ArticulatedModel* model_;
   model::Side side_;
@@ -81,6 +90,10 @@ class HandTracker {
     Candidate candidate;
     std::vector<int> metricHints;  // scratch: its simulator's bodies over all points
   };
+  // Loss test after the winner is chosen: counts frames in a row the winner disagrees with
+  // the detector; at DetectorSettings::disagreeFrames the detector-fit lane replaces it.
+  // Returns the lane to keep.
+  const Lane* checkAgainstDetector(const HandFrame& frame, const Lane* best);
   // A simulator's last nearest bodies over all of the frame's points, for the metric: the
   // simulations' own where they ran on thinned points (palmPointCap), else the frame start's.
   std::span<const int> metricHints(const Simulator& simulator, std::vector<int>& buffer) const;
@@ -112,6 +125,18 @@ class HandTracker {
   int lastWinner_ = -1;
   bool tracked_ = false;
   int badFrames_ = 0;
+  // Learned detector evidence (prepareDetectorEvidence) and the loss test's state.
+  model::KeypointFitter fitter_;
+  std::vector<int> fitIndices_;
+  std::vector<Vec3> fitTargets_;
+  std::vector<LabelledPoint> detectorLabels_;
+  model::ModelPose detectorPose_;
+  bool haveDetectorPose_ = false;
+  std::vector<int> confidentKeypoints_;  // of the 21, those used this frame
+  const detect::DetectedKeypoints* keypoints_ = nullptr;
+  int disagreeFrames_ = 0;
+  float disagreement_ = 0.0f;
+  Keypoints21 scratchKeypoints_{};
 };
 
 }  // namespace dynahand::track

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "dynahand/detector.h"
 #include "dynahand/hand_split.h"
 #include "dynahand/model_fit.h"
 
@@ -24,6 +25,8 @@ const char* strategyName(StrategyKind kind) {
       return "finger_flip";
     case StrategyKind::FeatureDetection:
       return "feature_detection";
+    case StrategyKind::DetectorFit:
+      return "detector_fit";
   }
   return "unknown";
 }
@@ -38,6 +41,9 @@ struct Tracker::Impl {
   HandSplitter splitter;
   HandSplit split;
   FingerDetector detector;
+  std::unique_ptr<detect::KeypointDetector> keypointDetector;  // null: none
+  detect::HandCrop crop;
+  detect::DetectedKeypoints keypoints[2];
   std::unique_ptr<WorkerPool> pool;       // null with one thread
   std::unique_ptr<HandTracker> hands[2];  // [0] right, [1] left
   std::vector<Vec3> handPoints[2];
@@ -78,11 +84,30 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
     if (!(pull >= 0.0f) || !std::isfinite(pull))
       return Error{"pullForce and acquisitionPullForce must be finite and >= 0 N"};
   TrackerSettings s = settings;
+  std::unique_ptr<detect::KeypointDetector> keypointDetector;
+  if (s.detector.enabled) {
+    const std::filesystem::path file = s.detector.weights.empty()
+                                           ? detect::defaultDetectorFile()
+                                           : std::filesystem::path(s.detector.weights);
+    if (!file.empty()) {
+      auto loaded = detect::KeypointDetector::load(file);
+      if (!loaded) return loaded.error();
+      keypointDetector = std::move(*loaded);
+      s.detector.weights = file.string();
+    }
+  }
+  if (!(s.detector.minConfidence >= 0.0f && s.detector.minConfidence <= 1.0f) ||
+      !(s.detector.minMeanConfidence >= 0.0f && s.detector.minMeanConfidence <= 1.0f))
+    return Error{"detector confidences must be in [0, 1]"};
+  if (!(s.detector.disagreeDistanceM > 0.0f) || s.detector.disagreeFrames < 1)
+    return Error{"detector disagreeDistanceM must be > 0 m and disagreeFrames >= 1"};
+  if (!keypointDetector) s.detector.enabled = false;
   const float length = rightHand.metadata().referenceLength;
   const float referenceLength = model::HandDimensions{}.length;
   if (s.scaleSegmentationToHand && length > referenceLength)
     s.cloud.segmentation.handRadiusM *= length / referenceLength;
   auto impl = std::make_unique<Impl>(rightHand, intrinsics, s);
+  impl->keypointDetector = std::move(keypointDetector);
   auto right = HandTracker::create(impl->right, model::Side::Right, s, impl->pool.get());
   if (!right) return right.error();
   impl->hands[0] = std::move(*right);
@@ -156,6 +181,22 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
   }
   for (int h = 0; h < handCount; ++h) {
     HandFrame in;
+    if (haveCloud && m.keypointDetector) {
+      // The learned detector on this hand's crop (left hands mirrored into right ones).
+      const Vec3* centre = nullptr;
+      Vec3 clusterCentre;
+      if (handCount == 2) {
+        const auto& cluster = m.split[h == 0 ? Hand::kRight : Hand::kLeft];
+        clusterCentre = cluster.centroid;
+        centre = cluster.present ? &clusterCentre : nullptr;
+      }
+      detect::DetectedKeypoints& k = m.keypoints[h];
+      k.valid = false;
+      if ((handCount == 1 || centre != nullptr) &&
+          detect::makeCrop(m.cloud, h == 1, m.crop, centre))
+        k = m.keypointDetector->detect(m.crop, m.intrinsics);
+      in.keypoints = k.valid ? &k : nullptr;
+    }
     in.points = m.handPoints[h];
     in.planes = m.cloud.planes;
     in.cloud = &m.cloud;

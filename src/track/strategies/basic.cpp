@@ -126,6 +126,7 @@ void runStrategiesSideBySide(std::span<Strategy* const> strategies,
 
 std::unique_ptr<Strategy> makeFingerFlipStrategy();
 std::unique_ptr<Strategy> makeFeatureDetectionStrategy();
+std::unique_ptr<Strategy> makeDetectorFitStrategy();
 
 std::unique_ptr<Strategy> makeStrategy(StrategyKind kind) {
   switch (kind) {
@@ -139,6 +140,8 @@ std::unique_ptr<Strategy> makeStrategy(StrategyKind kind) {
       return makeFingerFlipStrategy();
     case StrategyKind::FeatureDetection:
       return makeFeatureDetectionStrategy();
+    case StrategyKind::DetectorFit:
+      return makeDetectorFitStrategy();
   }
   return nullptr;
 }

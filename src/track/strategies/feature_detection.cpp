@@ -1,7 +1,8 @@
-// Paper "Feature Detection": when the five-finger detector fires, its fingertips are
-// bound to the fingertip bodies (labelled points, stronger than ordinary samples) in
-// a simulation of their own, so a false detection costs nothing: the error metric
-// simply does not pick it.
+// Paper "Feature Detection": detected features bound to the bodies they name (labelled
+// points, stronger than ordinary samples) in a simulation of their own, so a false
+// detection costs nothing: the error metric simply does not pick it. The features are the
+// learned detector's confident keypoints when it has them, else the five-finger
+// detector's fingertips when it fires.
 #include <vector>
 
 #include "track/strategies/strategy.h"
@@ -18,6 +19,11 @@ class FeatureDetectionStrategy final : public Strategy {
   int steps(int substeps) const override { return substeps + 1; }
 
   bool begin(StrategyContext& c) override {
+    if (!c.detectorLabels.empty()) {
+      labelledInput_ = c.input;
+      labelledInput_.labelled = c.detectorLabels;
+      return true;
+    }
     if (c.detection == nullptr || !c.detection->fired) return false;
     const auto& anatomy = c.rig.anatomy();
     labelled_.clear();

@@ -27,6 +27,10 @@ struct StrategyContext {
   float flipPeriod = 0.5f;                          // s
   const FingerDetection* detection = nullptr;       // this frame's five-finger detection
   const model::JointAngles* startAngles = nullptr;  // the model angles at the frame start
+  // The learned detector's evidence this frame (nullptr: none or not confident): its
+  // keypoints as labelled points on the bodies they name, and the model fitted to them.
+  std::span<const LabelledPoint> detectorLabels;
+  const model::ModelPose* detectorPose = nullptr;
 };
 
 class Strategy {

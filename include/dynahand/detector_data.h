@@ -1,0 +1,67 @@
+/// @file
+/// Synthetic training and evaluation data for the learned keypoint detector (detector.h):
+/// random hands (size, proportions, joint angles within the model's limits, clip poses and
+/// perturbations of them), seen from any direction at any place in view by any sensor
+/// profile, with walls, tables, held objects and a second hand; each rendered, passed through
+/// the cloud pipeline and cropped exactly as the tracker crops at run time. The file format
+/// is docs/formats/detector-data.md.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "dynahand/core.h"
+#include "dynahand/detector.h"
+
+namespace dynahand::detect {
+
+/// Which poses and hands a set draws from.
+enum class DataSplit {
+  Train,     ///< training clips and random poses; hand lengths outside the held-back band
+  HeldBack,  ///< only held-back clips (heldBackClips()) and hands in the held-back band
+};
+
+struct DataOptions {
+  int count = 1000;        ///< samples
+  std::uint64_t seed = 1;  ///< sample i is a function of (seed, i) alone
+  DataSplit split = DataSplit::Train;
+  int threads = 1;                 ///< worker threads (the bytes do not depend on it)
+  float proportionSpread = 0.15f;  ///< per-bone / per-finger factors in [1 - s, 1 + s]
+};
+
+/// Clips never used for training (the held-back motions).
+const std::vector<std::string>& heldBackClips();
+/// Hand lengths (m) in [first, second] are never used for training (held-back shapes).
+std::pair<float, float> heldBackLengthBand();
+
+/// One sample: the crop and its 21 keypoints in normalised crop coordinates (u, v, d).
+struct DataSample {
+  std::vector<float> pixels;  ///< (kCropPixels^2) in [-1, 1]
+  std::array<Vec3, kKeypointCount> uvd{};
+  std::array<Vec3, kKeypointCount> keypoints{};  ///< the same in the camera frame, m
+  CropFrame frame;                               ///< where the crop lies
+  int profile = 0;                               ///< index into synth::sensorProfiles()
+  int source = 0;  ///< 0 random pose, 1 clip pose, 2 perturbed clip pose
+};
+
+/// Makes sample `index` of a set (deterministic).
+DataSample makeSample(const DataOptions& options, int index);
+
+/// The detector on `count` samples of a set: mean and 95th-percentile keypoint error (mm,
+/// camera frame) and the mean confidence.
+struct DetectorFigures {
+  int samples = 0;
+  double meanMm = 0.0, p95Mm = 0.0, meanConfidence = 0.0;
+  double msPerCrop = 0.0;  ///< network time per crop, ms (one thread)
+};
+DetectorFigures evaluateDetector(KeypointDetector& detector, const DataOptions& options);
+
+/// Writes `options.count` samples to `file` (format: docs/formats/detector-data.md).
+/// progress(done, total) after each block of samples when given.
+Status writeDataFile(const DataOptions& options, const std::filesystem::path& file,
+                     const std::function<void(int, int)>& progress = {});
+
+}  // namespace dynahand::detect

@@ -1,0 +1,61 @@
+// The detector's crop (the definition is in dynahand/detector.h): nearest-pixel resampling of
+// the segmented depth around the hand's centroid, depth-normalised.
+#include <algorithm>
+#include <cmath>
+
+#include "dynahand/detector.h"
+
+namespace dynahand::detect {
+
+Vec3 CropFrame::toCamera(const Intrinsics& k, const Vec3& uvd) const {
+  const float u = mirrored ? -uvd.x() : uvd.x();
+  const float pu = centreU + u * halfPixels;
+  const float pv = centreV + uvd.y() * halfPixels;
+  const float z = centreZ + uvd.z() * (kCropSizeM * 0.5f);
+  return k.deproject(pu, pv, z);
+}
+
+Vec3 CropFrame::toCrop(const Intrinsics& k, const Vec3& p) const {
+  const float pu = k.fx * p.x() / p.z() + k.cx;
+  const float pv = k.fy * p.y() / p.z() + k.cy;
+  float u = (pu - centreU) / halfPixels;
+  if (mirrored) u = -u;
+  return {u, (pv - centreV) / halfPixels, (p.z() - centreZ) / (kCropSizeM * 0.5f)};
+}
+
+bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3* centre) {
+  const Intrinsics& k = cloud.intrinsics;
+  const Vec3 c = centre != nullptr ? *centre : cloud.segment.centroid;
+  if ((centre == nullptr && !cloud.segment.found) || !(c.z() > 0.05f)) return false;
+  CropFrame& f = out.frame;
+  f.centreU = k.fx * c.x() / c.z() + k.cx;
+  f.centreV = k.fy * c.y() / c.z() + k.cy;
+  f.halfPixels = k.fx * kCropSizeM * 0.5f / c.z();
+  f.centreZ = c.z();
+  f.mirrored = mirrored;
+  out.pixels.resize(static_cast<std::size_t>(kCropPixels * kCropPixels));
+  const float inverseHalfDepth = 2.0f / kCropSizeM;
+  const float step = 2.0f * f.halfPixels / static_cast<float>(kCropPixels);
+  const PixelBox box = cloud.segmentBox;
+  for (int row = 0; row < kCropPixels; ++row) {
+    const float pv = f.centreV + (static_cast<float>(row) + 0.5f) * step - f.halfPixels;
+    const int v = static_cast<int>(std::lround(pv));
+    float* line = out.pixels.data() + static_cast<std::ptrdiff_t>(row) * kCropPixels;
+    for (int col = 0; col < kCropPixels; ++col) {
+      const int x = mirrored ? kCropPixels - 1 - col : col;
+      const float pu = f.centreU + (static_cast<float>(x) + 0.5f) * step - f.halfPixels;
+      const int u = static_cast<int>(std::lround(pu));
+      float value = 1.0f;
+      if (box.contains(u, v) &&
+          cloud.mask[static_cast<std::size_t>(v) * static_cast<std::size_t>(k.width) +
+                     static_cast<std::size_t>(u)] != 0) {
+        const float z = cloud.depthAt(u, v);
+        if (z > 0.0f) value = std::clamp((z - f.centreZ) * inverseHalfDepth, -1.0f, 1.0f);
+      }
+      line[col] = value;
+    }
+  }
+  return true;
+}
+
+}  // namespace dynahand::detect

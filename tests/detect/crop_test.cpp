@@ -1,0 +1,130 @@
+// The detector's crop: its coordinates round-trip, mirroring, and a rendered hand's crop.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <fstream>
+#include <iterator>
+
+#include "dynahand/detector.h"
+#include "dynahand/detector_data.h"
+#include "dynahand/synth.h"
+
+namespace dynahand::detect {
+namespace {
+
+synth::SynthOptions waveOptions(int frames) {
+  synth::SynthOptions o;
+  o.clip = "wave";
+  o.profile = "tof";
+  o.frameCount = frames;
+  return o;
+}
+
+TEST(CropFrame, CropCoordinatesRoundTrip) {
+  Intrinsics k{320, 240, 220.0f, 221.0f, 160.5f, 119.5f};
+  for (const bool mirrored : {false, true}) {
+    CropFrame f{150.0f, 100.0f, 44.0f, 0.5f, mirrored};
+    for (const Vec3& p : {Vec3(0.01f, -0.02f, 0.5f), Vec3(-0.05f, 0.04f, 0.58f)}) {
+      const Vec3 uvd = f.toCrop(k, p);
+      EXPECT_LT((f.toCamera(k, uvd) - p).norm(), 1e-5f);
+    }
+  }
+  // Mirroring flips u only.
+  CropFrame plain{150.0f, 100.0f, 44.0f, 0.5f, false};
+  CropFrame mirrored = plain;
+  mirrored.mirrored = true;
+  const Vec3 p(0.03f, 0.01f, 0.52f);
+  const Vec3 a = plain.toCrop(k, p), b = mirrored.toCrop(k, p);
+  EXPECT_FLOAT_EQ(a.x(), -b.x());
+  EXPECT_FLOAT_EQ(a.y(), b.y());
+  EXPECT_FLOAT_EQ(a.z(), b.z());
+}
+
+TEST(HandCrop, RenderedHandFillsTheCropAroundItsKeypoints) {
+  auto seq = synth::SyntheticSequence::create(waveOptions(5));
+  ASSERT_TRUE(seq);
+  const synth::SyntheticFrame& frame = seq->frame(2);
+  CloudPipeline pipeline(seq->intrinsics());
+  CloudFrame cloud;
+  ASSERT_TRUE(pipeline.process(frame.depth, cloud));
+  ASSERT_TRUE(cloud.segment.found);
+  for (const bool mirrored : {false, true}) {
+    HandCrop crop;
+    ASSERT_TRUE(makeCrop(cloud, mirrored, crop));
+    ASSERT_EQ(crop.pixels.size(), static_cast<std::size_t>(kCropPixels * kCropPixels));
+    int hand = 0;
+    for (const float v : crop.pixels) {
+      EXPECT_GE(v, -1.0f);
+      EXPECT_LE(v, 1.0f);
+      hand += v < 1.0f ? 1 : 0;
+    }
+    EXPECT_GT(hand, kCropPixels * kCropPixels / 10);
+    // Every keypoint of the hand lies in the crop, and a visible fingertip's crop pixel holds
+    // hand depth near its own.
+    for (const Vec3& p : frame.hands[0].keypoints) {
+      const Vec3 uvd = crop.frame.toCrop(seq->intrinsics(), p);
+      EXPECT_LT(std::abs(uvd.x()), 1.0f);
+      EXPECT_LT(std::abs(uvd.y()), 1.0f);
+      EXPECT_LT(std::abs(uvd.z()), 1.0f);
+    }
+    const Vec3 tip = crop.frame.toCrop(seq->intrinsics(), frame.hands[0].keypoints[12]);
+    const int col = static_cast<int>((tip.x() + 1.0f) * 0.5f * kCropPixels);
+    const int row = static_cast<int>((tip.y() + 1.0f) * 0.5f * kCropPixels);
+    bool near = false;
+    for (int dr = -2; dr <= 2; ++dr)
+      for (int dc = -2; dc <= 2; ++dc) {
+        const int r = std::clamp(row + dr, 0, kCropPixels - 1);
+        const int c = std::clamp(col + dc, 0, kCropPixels - 1);
+        near = near || std::abs(crop.pixels[static_cast<std::size_t>(r * kCropPixels + c)] -
+                                tip.z()) < 0.15f;
+      }
+    EXPECT_TRUE(near) << "mirrored " << mirrored;
+  }
+}
+
+TEST(DetectorData, SamplesAreDeterministicAndLabelledInsideTheCrop) {
+  DataOptions o;
+  o.seed = 5;
+  for (const DataSplit split : {DataSplit::Train, DataSplit::HeldBack}) {
+    o.split = split;
+    for (int i = 0; i < 6; ++i) {
+      const DataSample a = makeSample(o, i);
+      const DataSample b = makeSample(o, i);
+      EXPECT_EQ(a.pixels, b.pixels);
+      for (std::size_t j = 0; j < a.uvd.size(); ++j) {
+        EXPECT_EQ(a.uvd[j], b.uvd[j]);
+        EXPECT_LE(a.uvd[j].head<2>().cwiseAbs().maxCoeff(), 1.3f);
+      }
+      if (split == DataSplit::HeldBack) {
+        EXPECT_NE(a.source, 0);  // clip poses only
+      }
+    }
+  }
+}
+
+TEST(DetectorData, FileBytesDoNotDependOnThreads) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("dynahand-detector-data-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  DataOptions o;
+  o.count = 70;
+  o.seed = 3;
+  ASSERT_TRUE(writeDataFile(o, dir / "one.bin"));
+  o.threads = 2;
+  ASSERT_TRUE(writeDataFile(o, dir / "two.bin"));
+  const auto size = std::filesystem::file_size(dir / "one.bin");
+  EXPECT_EQ(size, 20u + 70u * (kCropPixels * kCropPixels + 4u * (3u * kKeypointCount + 2u)));
+  auto read = [](const std::filesystem::path& file) {
+    std::string bytes(std::filesystem::file_size(file), '\0');
+    std::ifstream in(file, std::ios::binary);
+    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    return bytes;
+  };
+  EXPECT_EQ(read(dir / "one.bin"), read(dir / "two.bin"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "one.bin.partial"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynahand::detect

@@ -1,0 +1,214 @@
+#!/usr/bin/python3
+"""Trains dynahand's learned keypoint detector (docs/detector.md) and exports it to ONNX.
+
+Reproducible from seeds: the data comes from `dynahand detector data` (synthetic, sample i a
+function of (seed, i)); torch is seeded; one run on Debian's python3-torch (CPU).
+
+  /usr/bin/python3 train/train_detector.py --dynahand build/release/apps/dynahand \
+      --out models/detector            # the shipped weights (about 50 min on 2 cores)
+  /usr/bin/python3 train/train_detector.py --dynahand ... --out /tmp/d --quick   # a few steps
+
+Writes OUT/detector.onnx and OUT/detector.json (the model card's figures, measured by
+`dynahand detector eval` on held-back motions and hand shapes).
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+try:
+    import torch
+    from torch import nn
+except ImportError:  # reported in main(): CTest skips the quick run without torch
+    torch = None
+    nn = None
+
+CROP = 64
+KEYPOINTS = 21
+HALF_CROP_MM = 150.0  # one normalised crop unit (kCropSizeM / 2), mm
+CONFIDENCE_SCALE_MM = 20.0  # confidence target exp(-error / this)
+
+
+def read_data(path):
+    """The detector data file (docs/formats/detector-data.md) as numpy arrays."""
+    with open(path, "rb") as f:
+        head = f.read(20)
+    if head[:4] != b"DHKD":
+        raise ValueError(f"{path}: not a detector data file")
+    version, count, crop, keypoints = np.frombuffer(head[4:], dtype="<u4")
+    if version != 1 or crop != CROP or keypoints != KEYPOINTS:
+        raise ValueError(f"{path}: version {version}, crop {crop}, keypoints {keypoints} not supported")
+    record = np.dtype([("pixels", "u1", (CROP * CROP,)), ("uvd", "<f4", (KEYPOINTS * 3,)),
+                       ("meta", "<i4", (2,))])
+    data = np.memmap(path, dtype=record, mode="r", offset=20, shape=(int(count),))
+    return np.ascontiguousarray(data["pixels"]), np.ascontiguousarray(data["uvd"])
+
+
+def build_detector():
+    """64x64 depth crop -> 21 x (u, v, d) and 21 confidences (84 values)."""
+
+    def conv(cin, cout, stride):
+        return nn.Sequential(nn.Conv2d(cin, cout, 3, stride, 1, bias=False),
+                             nn.BatchNorm2d(cout), nn.ReLU(inplace=True))
+
+    class Detector(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.features = nn.Sequential(
+                conv(1, 16, 2),    # 32x32
+                conv(16, 32, 2),   # 16x16
+                conv(32, 32, 1),
+                conv(32, 64, 2),   # 8x8
+                conv(64, 64, 1),
+                conv(64, 128, 2),  # 4x4
+            )
+            self.head = nn.Sequential(nn.Flatten(), nn.Linear(128 * 16, 256),
+                                      nn.ReLU(inplace=True))
+            self.points = nn.Linear(256, KEYPOINTS * 3)
+            self.confidence = nn.Linear(256, KEYPOINTS)
+
+        def forward(self, x):
+            h = self.head(self.features(x))
+            return torch.cat([self.points(h), torch.sigmoid(self.confidence(h))], dim=1)
+
+    return Detector()
+
+
+def generate(dynahand, split, count, seed, path, threads):
+    if os.path.exists(path):
+        return
+    subprocess.run([dynahand, "detector", "data", "--split", split, "--count", str(count),
+                    "--seed", str(seed), "--threads", str(threads), "-o", path], check=True)
+
+
+def to_input(pixels, rng=None):
+    x = torch.from_numpy(pixels.astype(np.float32) / 127.5 - 1.0).view(-1, 1, CROP, CROP)
+    if rng is not None:
+        # Sensor dropout beyond the simulated one: a few per cent of pixels read "far".
+        drop = torch.from_numpy(rng.random(x.shape) < rng.uniform(0.0, 0.05)).to(torch.bool)
+        x = torch.where(drop, torch.ones_like(x), x)
+    return x
+
+
+def losses(output, target):
+    points = output[:, :KEYPOINTS * 3]
+    confidence = output[:, KEYPOINTS * 3:]
+    point_loss = (points - target).abs().mean()
+    error_mm = (points.detach() - target).view(-1, KEYPOINTS, 3).norm(dim=2) * HALF_CROP_MM
+    confidence_loss = ((confidence - torch.exp(-error_mm / CONFIDENCE_SCALE_MM)) ** 2).mean()
+    return point_loss, confidence_loss, error_mm.mean().item()
+
+
+def evaluate(model, pixels, uvd, batch=512):
+    model.eval()
+    errors = []
+    with torch.no_grad():
+        for i in range(0, len(pixels), batch):
+            out = model(to_input(pixels[i:i + batch]))
+            target = torch.from_numpy(uvd[i:i + batch])
+            errors.append((out[:, :KEYPOINTS * 3] - target).view(-1, KEYPOINTS, 3).norm(dim=2))
+    model.train()
+    return float(torch.cat(errors).mean()) * HALF_CROP_MM
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--dynahand", required=True, help="the dynahand command (generates the data)")
+    p.add_argument("--out", required=True, help="output folder for detector.onnx and detector.json")
+    p.add_argument("--work", default=None, help="data cache folder (default: OUT/../work or /tmp)")
+    p.add_argument("--train-count", type=int, default=80000)
+    p.add_argument("--heldback-count", type=int, default=2000)
+    p.add_argument("--epochs", type=float, default=8.0)
+    p.add_argument("--batch", type=int, default=128)
+    p.add_argument("--lr", type=float, default=2e-3)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--quick", action="store_true", help="a few steps on a small set (CI)")
+    p.add_argument("--skip-if-no-torch", action="store_true",
+                   help="exit 77 (CTest's skip) when python3-torch is not installed")
+    a = p.parse_args()
+    if torch is None:
+        print("train_detector: python3-torch is not installed (scripts/install-deps.sh)",
+              file=sys.stderr)
+        sys.exit(77 if a.skip_if_no_torch else 1)
+    if a.quick:
+        a.train_count, a.heldback_count, a.epochs = 256, 128, 1.0
+    os.makedirs(a.out, exist_ok=True)
+    work = a.work or os.path.join(a.out, "work")
+    os.makedirs(work, exist_ok=True)
+    torch.manual_seed(a.seed)
+    torch.set_num_threads(a.threads)
+    rng = np.random.default_rng(a.seed)
+
+    train_path = os.path.join(work, f"train_{a.train_count}_s{a.seed}.bin")
+    held_path = os.path.join(work, f"heldback_{a.heldback_count}_s{a.seed + 1000}.bin")
+    t0 = time.time()
+    generate(a.dynahand, "train", a.train_count, a.seed, train_path, a.threads)
+    generate(a.dynahand, "held-back", a.heldback_count, a.seed + 1000, held_path, a.threads)
+    data_s = time.time() - t0
+    pixels, uvd = read_data(train_path)
+    held_pixels, held_uvd = read_data(held_path)
+
+    model = build_detector()
+    params = sum(p.numel() for p in model.parameters())
+    steps = max(1, int(a.epochs * len(pixels) / a.batch))
+    optimiser = torch.optim.AdamW(model.parameters(), lr=a.lr, weight_decay=1e-4)
+    schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, max_lr=a.lr, total_steps=steps,
+                                                   pct_start=0.05)
+    print(f"detector: {params} parameters, {len(pixels)} training samples, {steps} steps "
+          f"of {a.batch}, data {data_s:.0f} s", flush=True)
+    t0 = time.time()
+    order = rng.permutation(len(pixels))
+    at = 0
+    for step in range(steps):
+        if at + a.batch > len(order):
+            order, at = rng.permutation(len(pixels)), 0
+        index = np.sort(order[at:at + a.batch])
+        at += a.batch
+        out = model(to_input(pixels[index], rng))
+        point_loss, confidence_loss, err = losses(out, torch.from_numpy(uvd[index]))
+        optimiser.zero_grad()
+        (point_loss + 0.5 * confidence_loss).backward()
+        optimiser.step()
+        schedule.step()
+        if step % 200 == 0 or step == steps - 1:
+            held = evaluate(model, held_pixels[:512], held_uvd[:512]) if step % 1000 == 0 or step == steps - 1 else float("nan")
+            print(f"step {step}/{steps} train {err:.1f} mm held-back {held:.1f} mm "
+                  f"{(step + 1) * a.batch / (time.time() - t0):.0f} samples/s", flush=True)
+    train_s = time.time() - t0
+    held_mm = evaluate(model, held_pixels, held_uvd)
+
+    model.eval()
+    onnx_path = os.path.join(a.out, "detector.onnx")
+    torch.onnx.export(model, torch.ones(1, 1, CROP, CROP), onnx_path, opset_version=11,
+                      input_names=["crop"], output_names=["keypoints"])
+    # The C++ side's figures on a fixed held-back set (what tests reproduce).
+    eval_args = ["--split", "held-back", "--count", "300" if not a.quick else "32", "--seed", "7"]
+    measured = json.loads(subprocess.run([a.dynahand, "detector", "eval", "--weights", onnx_path]
+                                         + eval_args, check=True, capture_output=True,
+                                         text=True).stdout)
+    card = {
+        "format": "dynahand-detector-card", "version": 1,
+        "input": [1, 1, CROP, CROP], "output": KEYPOINTS * 4, "parameters": params,
+        "training": {"command": " ".join(["train/train_detector.py"] + sys.argv[1:]),
+                     "seed": a.seed, "train_samples": a.train_count, "epochs": a.epochs,
+                     "batch": a.batch, "lr": a.lr, "threads": a.threads,
+                     "data_seconds": round(data_s), "train_seconds": round(train_s),
+                     "torch": torch.__version__},
+        "held_back": {"samples": a.heldback_count, "seed": a.seed + 1000,
+                      "mean_mm_approx": round(held_mm, 2)},
+        "figures": {"eval_args": eval_args, "mean_mm": measured["mean_mm"],
+                    "p95_mm": measured["p95_mm"], "mean_confidence": measured["mean_confidence"]},
+    }
+    with open(os.path.join(a.out, "detector.json"), "w") as f:
+        json.dump(card, f, indent=2)
+        f.write("\n")
+    print(json.dumps(card["figures"]))
+
+
+if __name__ == "__main__":
+    main()

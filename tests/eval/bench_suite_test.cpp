@@ -33,14 +33,16 @@ TEST(BenchSuite, AblationsAlsoRunTheClipsTheStrategiesTarget) {
     EXPECT_EQ(item.size.name, "medium");
     EXPECT_FALSE(item.autoInit);
   }
-  // 3 sizes x 4 profiles x 2 starts x the default clips; 6 variants on the default clips
-  // (their baseline is the standard tof / medium / gt item) and 7 on each targeted clip.
+  // 3 sizes x 4 profiles x 2 starts x the default clips; each strategy off and normal only
+  // on the default clips (their baseline is the standard tof / medium / gt item), and "all"
+  // besides on each targeted clip.
+  const int variants = track::kStrategyCount + 1;
   EXPECT_EQ(standard, 3 * 4 * 2 * static_cast<int>(defaults.size()));
-  EXPECT_EQ(ablations, 6 * static_cast<int>(defaults.size()) + 7 * 3);
-  for (const auto& variants : variantsOfTargeted) {
-    EXPECT_EQ(variants.size(), 7u);
-    EXPECT_TRUE(variants.contains("all") && variants.contains("no finger_flip") &&
-                variants.contains("normal only"));
+  EXPECT_EQ(ablations, variants * static_cast<int>(defaults.size()) + (variants + 1) * 3);
+  for (const auto& targetedVariants : variantsOfTargeted) {
+    EXPECT_EQ(targetedVariants.size(), static_cast<std::size_t>(variants + 1));
+    EXPECT_TRUE(targetedVariants.contains("all") && targetedVariants.contains("no finger_flip") &&
+                targetedVariants.contains("normal only"));
   }
   // The quick suite (CI) has no targeted clips.
   for (const SuiteItem& item : standardSuite({.quick = true})) EXPECT_FALSE(item.targeted);

@@ -348,7 +348,6 @@ TEST(SyntheticSequence, HeadPlacementReplacesPoseFilesRigidly) {
       (clip0.keypoints[5] - clip0.keypoints[0]).cross(clip0.keypoints[17] - clip0.keypoints[0]);
   EXPECT_LT(palmDesk.z() * palmHead.z(), 0.0f);  // the other side of the hand faces the camera
   EXPECT_GT(palmHead.z() * palmClip.z(), 0.0f);
-  EXPECT_LT((b0.keypoints[0] - clip0.keypoints[0]).norm(), 0.05f);
   // The same motion: distances between any keypoints of any two frames are kept.
   for (int f : {0, 7, 19, 29}) {
     const HandTruth ta = a->truth(f, 0), tb = b->truth(f, 0);

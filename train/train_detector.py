@@ -182,6 +182,7 @@ def main():
     train_s = time.time() - t0
     held_mm = evaluate(model, held_pixels, held_uvd)
 
+    torch.save(model.state_dict(), os.path.join(work, "detector.pt"))
     model.eval()
     onnx_path = os.path.join(a.out, "detector.onnx")
     torch.onnx.export(model, torch.ones(1, 1, CROP, CROP), onnx_path, opset_version=11,

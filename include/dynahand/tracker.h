@@ -42,13 +42,18 @@ struct DetectorSettings {
   // the tracker runs without a detector. A file given here that does not load is an error.
   std::string weights;
   // Keypoints below this confidence ([0, 1]) are not used by the strategies.
-  float minConfidence = 0.4f;
-  // The detector-fit simulation, acquisition and the loss test run when the detection's mean
-  // confidence reaches this.
-  float minMeanConfidence = 0.45f;
-  // Loss test: the tracked hand is replaced by the detector-fit simulation when its keypoints
-  // stay farther than this (m, mean over confident keypoints) from the detector's for
-  // disagreeFrames frames in a row.
+  float minConfidence = 0.3f;
+  // The detector-fit and feature simulations and acquisition use the detection when its mean
+  // confidence reaches this (the error metric still decides between the simulations).
+  float minMeanConfidence = 0.25f;
+  // ... and when the frame-start pose's keypoints are farther than this (m, mean over the
+  // confident keypoints) from the detector's: closer, its noise has nothing to add.
+  float engageDistanceM = 0.02f;
+  // Loss test: when the detection's mean confidence reaches lossTestMinMeanConfidence and the
+  // tracked keypoints stay farther than disagreeDistanceM (m, mean over the confident
+  // keypoints) from the detector's for disagreeFrames frames in a row, the detector-fit
+  // simulation's hand replaces the winner.
+  float lossTestMinMeanConfidence = 0.45f;
   float disagreeDistanceM = 0.035f;
   int disagreeFrames = 4;
 };
@@ -65,7 +70,7 @@ struct TrackerSettings {
   // bits for any count: each simulation has its own copy of the hand.
   int threads = 1;
   // Strategies to run, by StrategyKind (ablations switch some off).
-  std::array<bool, kStrategyCount> strategies = {true, true, true, true, true};
+  std::array<bool, kStrategyCount> strategies = {true, true, true, true, true, true};
   // Physics steps per frame per simulation (gross motion and finger flip run twice this,
   // the detector this plus one). 2 with pullForce 7000 N tracks as well as 3 with 4000 N
   // for 27 % less time; 2 without the stronger pull lost fast motion and finger flips

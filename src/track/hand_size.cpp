@@ -103,7 +103,11 @@ class CandidateScorer {
     CandidateFrames c;
     c.scores.assign(frames_.size(), 0.0f);
     c.open.assign(frames_.size(), 0);
-    auto tracker = Tracker::create(model::makeDefaultHand(size), intrinsics_, options_.tracker);
+    // The candidates are scored on how well the paper's simulations alone fit each size: the
+    // detector-fit simulation would fit a wrong-sized hand to its keypoints as readily.
+    TrackerSettings settings = options_.tracker;
+    settings.detector.enabled = false;
+    auto tracker = Tracker::create(model::makeDefaultHand(size), intrinsics_, settings);
     if (!tracker) return c;
     if (start_ && !(*tracker)->initializeFromKeypoints(*start_)) return c;
     for (std::size_t f = 0; f < frames_.size(); ++f) {

@@ -15,7 +15,8 @@ constexpr int kMinPoints = 20;  // fewer sample points: no hand in view
 // A detected keypoint, bound to its body, pulls like this many samples (times its
 // confidence).
 constexpr float kDetectorLabelCap = 8.0f;
-constexpr std::size_t kMinFitKeypoints = 8;  // fewer confident keypoints: no fitted pose
+constexpr std::size_t kMinFitKeypoints = 8;   // fewer confident keypoints: no fitted pose
+constexpr float kOffHandTipPenaltyM = 0.05f;  // acquisition: per fingertip over background
 
 // The hand's own world (acquisition steps it); the simulations' copies take the tracking
 // sweeps (HandTracker's constructor).
@@ -331,6 +332,13 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   auto& world = rig_.world();
   world.saveState(start_);
   rig_.readPose(pose_);
+  // The detector's simulations run only when the frame starts away from its keypoints: where
+  // the two agree, the detector's ~1-2 cm of noise has nothing to add to the fit.
+  bool engageDetector = false;
+  if (keypoints_ != nullptr) {
+    scratchKeypoints_ = model::keypoints21(*model_, pose_);
+    engageDetector = detectorDistance(scratchKeypoints_) > settings_.detector.engageDistanceM;
+  }
   const int forearm = rig_.anatomy().forearm;
   const Pose forearmPose = world.pose(forearm);
   const AxisHold hold{forearm, Vec3::Zero(), forearmPose.p,
@@ -356,11 +364,17 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   // detector's) share that step's rows too.
   simulator_.prepareFrameStartRows(rig_, laneInput);
   auto contextOf = [&](Lane& lane) {
-    return StrategyContext{lane.rig,        lane.simulator,
-                           laneInput,       settings_.substeps,
-                           frame.time,      settings_.flipPeriodS,
-                           frame.detection, &startAngles_,
-                           detectorLabels_, haveDetectorPose_ ? &detectorPose_ : nullptr};
+    return StrategyContext{lane.rig,
+                           lane.simulator,
+                           laneInput,
+                           settings_.substeps,
+                           frame.time,
+                           settings_.flipPeriodS,
+                           frame.detection,
+                           &startAngles_,
+                           engageDetector ? std::span<const LabelledPoint>(detectorLabels_)
+                                          : std::span<const LabelledPoint>(),
+                           engageDetector && haveDetectorPose_ ? &detectorPose_ : nullptr};
   };
   auto startLane = [&](Lane& lane) {
     lane.rig.world().restoreState(start_);
@@ -503,6 +517,7 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
   starts.push_back({axis, -across * mirror, false});  // back of the hand toward the camera
 
   float bestError = std::numeric_limits<float>::infinity();
+  float bestScore = std::numeric_limits<float>::infinity();
   std::vector<LabelledPoint> labels;
   for (const Start& s : starts) {
     rig_.setPose(s.fitted ? detectorPose_ : canonicalPose(frame, s.axis, s.thumb));
@@ -527,7 +542,21 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
                                   : StrategyKind::Normal;
     candidate.ran = true;
     candidate.error = evaluate(acquisitionSimulator_, frame);
-    if (candidate.error < bestError) {
+    // Acquisition compares starts far apart: a fingertip left over background (which the
+    // paper's metric scores only through its bone's centroid) counts as kOffHandTipPenaltyM.
+    float score = candidate.error;
+    if (frame.cloud != nullptr) {
+      rig_.readPose(pose_);
+      scratchKeypoints_ = model::keypoints21(*model_, pose_);
+      std::array<Vec3, 5> tips;
+      for (std::size_t f = 0; f < 5; ++f) tips[f] = scratchKeypoints_[4 + 4 * f];
+      score += kOffHandTipPenaltyM *
+               static_cast<float>(measureFitQuality(posed_, error_.pointDistance, *frame.cloud,
+                                                    rig_.anatomy().forearm, tips)
+                                      .fingertipsOffHand);
+    }
+    if (score < bestScore) {
+      bestScore = score;
       bestError = candidate.error;
       world.saveState(best_);
       bestBreakdown_ = error_;

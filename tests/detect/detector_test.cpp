@@ -72,7 +72,7 @@ TEST(KeypointDetector, RunsOnACropIntoTheCameraFrame) {
   ASSERT_TRUE(d.valid);
   double sum = 0.0;
   for (std::size_t i = 0; i < d.points.size(); ++i) {
-    sum += (d.points[i] - s.keypoints[i]).norm();
+    sum += static_cast<double>((d.points[i] - s.keypoints[i]).norm());
     EXPECT_GE(d.confidence[i], 0.0f);
     EXPECT_LE(d.confidence[i], 1.0f);
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <mutex>
 
 #include "dynahand/detector.h"
 
@@ -31,6 +32,12 @@ Result<std::unique_ptr<KeypointDetector>> KeypointDetector::load(
   std::error_code ec;
   if (!std::filesystem::is_regular_file(onnxFile, ec))
     return Error{name + ": detector weights not found (an ONNX file; see docs/detector.md)"};
+  // One thread, as the rest of the tracker: OpenCV would spread this small network over
+  // every core for little gain, and trackers on several threads (bench items, hand-size
+  // candidates) would oversubscribe them. OpenCV's thread count is process-wide: set once,
+  // before the first network runs (changing it while other threads run OpenCV code crashes).
+  static std::once_flag oneThread;
+  std::call_once(oneThread, [] { cv::setNumThreads(1); });
   auto impl = std::make_unique<Impl>();
   impl->file = onnxFile;
   try {
@@ -59,13 +66,8 @@ Result<std::unique_ptr<KeypointDetector>> KeypointDetector::load(
 std::span<const float> KeypointDetector::run(std::span<const float> pixels) {
   Impl& m = *impl_;
   std::copy(pixels.begin(), pixels.end(), m.input.ptr<float>());
-  // One thread, as the rest of the tracker: OpenCV would spread this small network over
-  // every core for little gain.
-  const int threads = cv::getNumThreads();
-  cv::setNumThreads(1);
   m.net.setInput(m.input);
   m.net.forward(m.output);
-  cv::setNumThreads(threads);
   return {m.output.ptr<float>(), static_cast<std::size_t>(kOutputCount)};
 }
 

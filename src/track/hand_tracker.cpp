@@ -119,6 +119,7 @@ void HandTracker::prepareDetectorEvidence(const HandFrame& frame) {
   detectorLabels_.clear();
   confidentKeypoints_.clear();
   haveDetectorPose_ = false;
+  detectorPoseTried_ = false;
   keypoints_ = nullptr;
   const detect::DetectedKeypoints* d = frame.keypoints;
   const DetectorSettings& s = settings_.detector;
@@ -141,10 +142,19 @@ void HandTracker::prepareDetectorEvidence(const HandFrame& frame) {
     return;
   }
   keypoints_ = d;
-  Result<model::FitResult> fit = fitter_.fit(fitIndices_, fitTargets_);
-  if (!fit) return;
-  model::forwardKinematicsInto(*model_, fit->angles, detectorPose_);
-  haveDetectorPose_ = true;
+}
+
+bool HandTracker::fitDetectorPose() {
+  if (keypoints_ == nullptr) return false;
+  if (!detectorPoseTried_) {
+    detectorPoseTried_ = true;
+    Result<model::FitResult> fit = fitter_.fit(fitIndices_, fitTargets_);
+    if (fit) {
+      model::forwardKinematicsInto(*model_, fit->angles, detectorPose_);
+      haveDetectorPose_ = true;
+    }
+  }
+  return haveDetectorPose_;
 }
 
 float HandTracker::detectorDistance(const Keypoints21& keypoints) const {
@@ -363,6 +373,9 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   // The strategies that only change joints or welds before their first step (all but the
   // detector's) share that step's rows too.
   simulator_.prepareFrameStartRows(rig_, laneInput);
+  // Fitted here, not in a lane: lanes may run on other threads.
+  const model::ModelPose* fittedStart =
+      engageDetector && fitDetectorPose() ? &detectorPose_ : nullptr;
   auto contextOf = [&](Lane& lane) {
     return StrategyContext{lane.rig,
                            lane.simulator,
@@ -374,7 +387,7 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
                            &startAngles_,
                            engageDetector ? std::span<const LabelledPoint>(detectorLabels_)
                                           : std::span<const LabelledPoint>(),
-                           engageDetector && haveDetectorPose_ ? &detectorPose_ : nullptr};
+                           fittedStart};
   };
   auto startLane = [&](Lane& lane) {
     lane.rig.world().restoreState(start_);
@@ -507,7 +520,7 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
     bool fitted = false;  // the pose fitted to the learned detector's keypoints
   };
   std::vector<Start> starts;
-  if (haveDetectorPose_) starts.push_back({Vec2::Zero(), Vec2::Zero(), false, true});
+  if (fitDetectorPose()) starts.push_back({Vec2::Zero(), Vec2::Zero(), false, true});
   const float mirror = side_ == model::Side::Right ? 1.0f : -1.0f;
   const bool detected = frame.detection != nullptr && frame.detection->fired;
   if (detected) {

@@ -66,9 +66,12 @@ class HandTracker {
   model::ModelPose canonicalPose(const HandFrame& frame, const Vec2& axisImage,
                                  const Vec2& thumbSideImage) const;
   void fillResult(HandResult& out);
-  // The learned detector's evidence of this frame (detectorLabels_, detectorPose_): its
-  // confident keypoints and the model fitted to them; none below the confidence settings.
+  // The learned detector's evidence of this frame (detectorLabels_, keypoints_): its
+  // confident keypoints; none below the confidence settings.
   void prepareDetectorEvidence(const HandFrame& frame);
+  // The model fitted to the detector's confident keypoints (detectorPose_), once per frame
+  // and only when a strategy or acquisition asks; false without one.
+  bool fitDetectorPose();
   // Mean distance (m) of `keypoints` from the detector's confident ones.
   float detectorDistance(const Keypoints21& keypoints) const;
 
@@ -132,6 +135,7 @@ class HandTracker {
   std::vector<LabelledPoint> detectorLabels_;
   model::ModelPose detectorPose_;
   bool haveDetectorPose_ = false;
+  bool detectorPoseTried_ = false;
   std::vector<int> confidentKeypoints_;  // of the 21, those used this frame
   const detect::DetectedKeypoints* keypoints_ = nullptr;
   int disagreeFrames_ = 0;

@@ -49,18 +49,16 @@ struct DetectorSettings {
   // ... and when the frame-start pose's keypoints are farther than this (m, mean over the
   // confident keypoints) from the detector's: closer, its noise has nothing to add.
   float engageDistanceM = 0.02f;
-  // Loss test: when the detection's mean confidence reaches lossTestMinMeanConfidence and the
-  // tracked keypoints stay farther than disagreeDistanceM (m, mean over the confident
-  // keypoints) from the detector's for disagreeFrames frames in a row, the detector-fit
-  // simulation's hand replaces the winner.
-  float lossTestMinMeanConfidence = 0.45f;
+  // Loss test: when the tracked keypoints stay farther than disagreeDistanceM (m, mean over
+  // the confident keypoints of a detection used as above) from the detector's for
+  // disagreeFrames frames in a row, the detector-fit simulation's hand replaces the winner.
   float disagreeDistanceM = 0.035f;
   int disagreeFrames = 4;
 };
 
 struct TrackerSettings {
-  CloudConfig cloud;
-  DetectorSettings detector;  // filtering, segmentation, voxel size, planes
+  CloudConfig cloud;  // filtering, segmentation, voxel size, planes
+  DetectorSettings detector;
   // The segmentation ball (cloud.segmentation.handRadiusM) is set for the reference hand
   // (model::HandDimensions{}, 0.19 m long); a longer model hand scales it up in proportion,
   // or a hand whose nearest point is a fingertip loses its far fingertips to the ball.

@@ -2,10 +2,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
 
-#include <cmath>
+#include <algorithm>
 #include <cstdlib>
-#include <fstream>
 #include <mutex>
+#include <string>
 
 #include "dynahand/detector.h"
 

@@ -3,11 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <fstream>
 #include <map>
-#include <mutex>
-#include <numbers>
 #include <random>
 #include <thread>
 
@@ -17,6 +14,7 @@
 #include "dynahand/synth.h"
 #include "dynahand/synth_render.h"
 #include "dynahand/synth_sensor.h"
+#include "synth/random.h"
 
 namespace dynahand::detect {
 
@@ -26,13 +24,6 @@ constexpr float kForearmPerLength = 1.4f;  // as the synthesiser: elbow beyond t
 constexpr float kReferenceWidth = 0.085f;  // SurfaceRadii are for this palm width
 constexpr std::uint32_t kFormatVersion = 1;
 constexpr char kMagic[4] = {'D', 'H', 'K', 'D'};
-
-std::uint64_t splitMix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 using Rng = std::mt19937_64;
 float uniform(Rng& rng, float a, float b) {
@@ -127,6 +118,8 @@ struct Worker {
   std::vector<synth::RoundCone> surface, solids;
   std::vector<synth::Plane> planes;
   HandCrop crop;
+  // Per joint, the finger it moves (jointFingers): the same for every default hand.
+  std::vector<int> fingers;
 
   Worker() {
     for (const synth::SensorProfile& p : synth::sensorProfiles())
@@ -141,6 +134,7 @@ struct Worker {
                .emplace(key, model::makeDefaultHand({static_cast<float>(key.first) * 0.001f,
                                                      static_cast<float>(key.second) * 0.001f}))
                .first;
+    if (fingers.empty()) fingers = jointFingers(it->second);
     return it->second;
   }
 };
@@ -175,7 +169,7 @@ PosedHand randomHand(Worker& w, const DataOptions& o, Rng& rng, const Vec3& targ
                                              : pick < 0.75f ? 1
                                                             : 2);
   if (source == 0) {
-    randomAngles(m, jointFingers(m), rng, angles);
+    randomAngles(m, w.fingers, rng, angles);
   } else {
     const std::string& clip =
         clipNames[std::uniform_int_distribution<std::size_t>(0, clipNames.size() - 1)(rng)];
@@ -320,7 +314,8 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
 }
 
 DataSample makeSampleWith(Worker& w, const DataOptions& o, int index) {
-  Rng rng(splitMix(splitMix(o.seed) ^ static_cast<std::uint64_t>(index)));
+  using synth::detail::mix64;
+  Rng rng(mix64(mix64(o.seed) ^ static_cast<std::uint64_t>(index)));
   DataSample sample;
   while (!attempt(w, o, rng, index, sample)) {
   }

@@ -169,16 +169,14 @@ float HandTracker::detectorDistance(const Keypoints21& keypoints) const {
 
 const HandTracker::Lane* HandTracker::checkAgainstDetector(const HandFrame& frame,
                                                            const Lane* best) {
-  disagreement_ = 0.0f;
   if (best == nullptr || keypoints_ == nullptr) {
     disagreeFrames_ = 0;
     return best;
   }
-  model::ModelPose& pose = pose_;
-  best->rig.readPose(pose);
-  scratchKeypoints_ = model::keypoints21(*model_, pose);
-  disagreement_ = detectorDistance(scratchKeypoints_);
-  disagreeFrames_ = disagreement_ > settings_.detector.disagreeDistanceM ? disagreeFrames_ + 1 : 0;
+  best->rig.readPose(pose_);
+  scratchKeypoints_ = model::keypoints21(*model_, pose_);
+  const bool disagrees = detectorDistance(scratchKeypoints_) > settings_.detector.disagreeDistanceM;
+  disagreeFrames_ = disagrees ? disagreeFrames_ + 1 : 0;
   if (disagreeFrames_ < settings_.detector.disagreeFrames) return best;
   for (const auto& lane : lanes_) {
     if (lane->candidate.kind != StrategyKind::DetectorFit || !lane->candidate.ran ||
@@ -190,9 +188,6 @@ const HandTracker::Lane* HandTracker::checkAgainstDetector(const HandFrame& fram
              metricHints(replacement.simulator, replacement.metricHints), replacement.posed,
              replacement.error);
     replacement.candidate.error = replacement.error.total;
-    replacement.rig.readPose(pose);
-    scratchKeypoints_ = model::keypoints21(*model_, pose);
-    disagreement_ = detectorDistance(scratchKeypoints_);
     disagreeFrames_ = 0;
     return &replacement;
   }

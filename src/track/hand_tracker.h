@@ -139,7 +139,6 @@ class HandTracker {
   std::vector<int> confidentKeypoints_;  // of the 21, those used this frame
   const detect::DetectedKeypoints* keypoints_ = nullptr;
   int disagreeFrames_ = 0;
-  float disagreement_ = 0.0f;
   Keypoints21 scratchKeypoints_{};
 };
 

@@ -9,17 +9,10 @@
 #include "dynahand/detector.h"
 #include "dynahand/detector_data.h"
 #include "dynahand/synth.h"
+#include "synth_options.h"
 
 namespace dynahand::detect {
 namespace {
-
-synth::SynthOptions waveOptions(int frames) {
-  synth::SynthOptions o;
-  o.clip = "wave";
-  o.profile = "tof";
-  o.frameCount = frames;
-  return o;
-}
 
 TEST(CropFrame, CropCoordinatesRoundTrip) {
   Intrinsics k{320, 240, 220.0f, 221.0f, 160.5f, 119.5f};
@@ -42,7 +35,7 @@ TEST(CropFrame, CropCoordinatesRoundTrip) {
 }
 
 TEST(HandCrop, RenderedHandFillsTheCropAroundItsKeypoints) {
-  auto seq = synth::SyntheticSequence::create(waveOptions(5));
+  auto seq = synth::SyntheticSequence::create(test::clipOptions("wave", "tof", 5));
   ASSERT_TRUE(seq);
   const synth::SyntheticFrame& frame = seq->frame(2);
   CloudPipeline pipeline(seq->intrinsics());

@@ -8,18 +8,11 @@
 
 #include "dynahand/synth.h"
 #include "dynahand/tracker.h"
+#include "synth_options.h"
 #include "test_support.h"
 
 namespace dynahand::track {
 namespace {
-
-synth::SynthOptions waveOptions(int frames) {
-  synth::SynthOptions o;
-  o.clip = "wave";
-  o.profile = "tof";
-  o.frameCount = frames;
-  return o;
-}
 
 // Mean 21-keypoint error (m) over frames [from, count) of the sequence, ground-truth start.
 double trackMeanError(synth::SyntheticSequence& seq, const TrackerSettings& settings, int from,
@@ -62,7 +55,7 @@ TEST(DetectorTracking, HandTurnedThroughEdgeOnIsRecovered) {
 }
 
 TEST(DetectorTracking, WithoutTheDetectorNoDetectorSimulationRuns) {
-  auto seq = synth::SyntheticSequence::create(waveOptions(4));
+  auto seq = synth::SyntheticSequence::create(test::clipOptions("wave", "tof", 4));
   ASSERT_TRUE(seq);
   TrackerSettings s;
   s.detector.enabled = false;
@@ -83,7 +76,7 @@ TEST(DetectorTracking, WithoutTheDetectorNoDetectorSimulationRuns) {
 }
 
 TEST(DetectorTracking, WithTheShippedDetectorItRunsEveryFrame) {
-  auto seq = synth::SyntheticSequence::create(waveOptions(4));
+  auto seq = synth::SyntheticSequence::create(test::clipOptions("wave", "tof", 4));
   ASSERT_TRUE(seq);
   auto tracker = Tracker::create(seq->model(0), seq->intrinsics());
   ASSERT_TRUE(tracker) << tracker.message();
@@ -101,7 +94,7 @@ TEST(DetectorTracking, WithTheShippedDetectorItRunsEveryFrame) {
 }
 
 TEST(DetectorTracking, BadWeightsFileIsAnErrorNamingIt) {
-  auto seq = synth::SyntheticSequence::create(waveOptions(1));
+  auto seq = synth::SyntheticSequence::create(test::clipOptions("wave", "tof", 1));
   ASSERT_TRUE(seq);
   TrackerSettings s;
   s.detector.weights = "/nonexistent/dir/weights.onnx";

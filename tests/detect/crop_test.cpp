@@ -9,7 +9,7 @@
 #include "dynahand/detector.h"
 #include "dynahand/detector_data.h"
 #include "dynahand/synth.h"
-#include "synth_options.h"
+#include "synth_support.h"
 
 namespace dynahand::detect {
 namespace {

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dynahand/synth.h"
+#include "synth_support.h"
 #include "test_support.h"
 
 namespace dynahand::synth {
@@ -118,7 +119,6 @@ TEST(HandProportions, SequenceRendersAndReportsTheProportionedHand) {
   longer.proportions.fingerThickness.fill(1.2f);
   Result<SyntheticSequence> shaped = SyntheticSequence::create(longer);
   ASSERT_TRUE(shaped.ok()) << shaped.message();
-  const Intrinsics& k = shaped->intrinsics();
   for (int f : {0, 10}) {
     const HandTruth a = plain->truth(f, 0), b = shaped->truth(f, 0);
     // The model's poses are the same; the keypoints are the stretched skeleton.
@@ -137,15 +137,7 @@ TEST(HandProportions, SequenceRendersAndReportsTheProportionedHand) {
       return n;
     };
     const SyntheticFrame& frame = shaped->frame(f);
-    int inside = 0;
-    for (const Vec3& p : frame.hands[0].keypoints) {
-      const Vec2 uv = k.project(p);
-      if (!k.contains(uv.x(), uv.y())) continue;
-      const std::size_t i = static_cast<std::size_t>(std::lround(uv.y())) * k.width +
-                            static_cast<std::size_t>(std::lround(uv.x()));
-      inside += shaped->labels()[i] == PixelLabel::Hand0;
-    }
-    EXPECT_EQ(inside, 21) << "frame " << f;
+    EXPECT_EQ(test::keypointsOnHandPixels(*shaped, frame), 21) << "frame " << f;
     const int shapedPixels = handPixels(*shaped);
     plain->frame(f);
     EXPECT_GT(shapedPixels, handPixels(*plain) + 200) << "frame " << f;

@@ -7,6 +7,7 @@
 
 #include "dynahand/sequence.h"
 #include "dynahand/synth.h"
+#include "synth_support.h"
 #include "test_support.h"
 
 namespace dynahand::synth {
@@ -289,18 +290,9 @@ TEST(SyntheticSequence, PlaysTheAuthorsAnimbankRetargetedToOurHand) {
   o.poseFile = data / "intel" / "animbank.pose";
   Result<SyntheticSequence> seq = SyntheticSequence::create(o);
   ASSERT_TRUE(seq.ok()) << seq.message();
-  const Intrinsics& k = seq->intrinsics();
   for (int f = 0; f < 4; ++f) {
     const SyntheticFrame& frame = seq->frame(f);
-    int inside = 0;
-    for (const Vec3& p : frame.hands[0].keypoints) {
-      const Vec2 uv = k.project(p);
-      if (!k.contains(uv.x(), uv.y())) continue;
-      const std::size_t i = static_cast<std::size_t>(std::lround(uv.y())) * k.width +
-                            static_cast<std::size_t>(std::lround(uv.x()));
-      inside += seq->labels()[i] == PixelLabel::Hand0;
-    }
-    EXPECT_EQ(inside, 21) << "frame " << f;
+    EXPECT_EQ(test::keypointsOnHandPixels(*seq, frame), 21) << "frame " << f;
   }
 }
 

@@ -8,7 +8,7 @@
 
 #include "dynahand/synth.h"
 #include "dynahand/tracker.h"
-#include "synth_options.h"
+#include "synth_support.h"
 #include "test_support.h"
 
 namespace dynahand::track {

@@ -84,7 +84,8 @@ struct SynthOptions {
   // placement; `head` re-places the whole sequence rigidly (one transform for every frame)
   // so that the mean forearm placement of the poses played (mean position, normalised mean
   // quaternion) lies at the head-mounted rest placement: the same motion, seen from the
-  // head-mounted camera.
+  // head-mounted camera; a frame whose forearm lies more than 30 degrees from the rest
+  // direction is turned about the wrist to 30 degrees (an arm comes from the body).
   std::filesystem::path poseFile;
   std::filesystem::path intelModelFile;  // for .pose; empty = model_hand.json beside it
   // Optional: the poses already loaded (loadPoseAngles for the same file and hand size), so

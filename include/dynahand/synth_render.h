@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -97,8 +98,11 @@ SurfaceRadii scaledRadii(const SurfaceRadii& radii, const HandProportions& p);
 struct HandSkeleton {
   HandKeypoints keypoints = zeroKeypoints();  // m, camera frame
   Vec3 elbow = Vec3::Zero();                  // m, camera frame: far end of the forearm
-  bool leftHand = false;                      // mirrors the palm normal used for the fingertip pads
-  float scale = 1.0f;                         // radii multiplier (hand size / reference size)
+  // m, camera frame: where an upper arm from the elbow ends (none when empty). A camera that
+  // sees the elbow (head-mounted) sees the arm go on to the shoulder.
+  std::optional<Vec3> shoulder;
+  bool leftHand = false;  // mirrors the palm normal used for the fingertip pads
+  float scale = 1.0f;     // radii multiplier (hand size / reference size)
 };
 
 // Maximum primitives one hand produces (fingers, palm, pads, forearm).

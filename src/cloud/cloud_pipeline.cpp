@@ -26,6 +26,15 @@ constexpr float kLimbRadiusFactor = 2.0f;
 // A ball moved toward a limb's free end stops with the end this far (in hand radii) from
 // its centre.
 constexpr float kEndInsideBall = 0.75f;
+// The limb is explored again from its free end at most this many times, while the end moves
+// more than kLimbEndMoveFactor hand radii.
+constexpr int kLimbEndRounds = 2;
+constexpr float kLimbEndMoveFactor = 0.5f;
+// A limb cut off by the sensor's near range is cut within this depth (m) of its nearest point.
+constexpr float kNearCutDepthM = 0.03f;
+// ... and nearer than this (m): depth cameras measure nothing nearer than 0.2-0.5 m, while a hand
+// tracked that near is rare; a hole in a hand farther away is missing data, not a cut.
+constexpr float kNearCutMaxDepthM = 0.30f;
 // Pieces of a hand broken up by missing data (fingers seen edge-on by a structured-light
 // camera), in metres: taken together as one volume when at most kPieceDepthM behind the nearest
 // of them (the depth of a hand seen edge-on, fingers curled); joining a volume taken when at
@@ -138,10 +147,26 @@ bool CloudPipeline::Impl::findLimbEnd(const DepthGrid& grid, int seed, const Gro
   const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
   // More than half the ball's cross-section is a body, not a limb (as in RegionGrower::grow).
   if (r.areaM2 > 0.5f * std::numbers::pi_v<float> * coarseRadius * coarseRadius) return false;
-  const int cell = limbEnd.find(grid, k, seed, seg.step, kLimbRadiusFactor * seg.handRadiusM,
-                                seg.borderMarginPixels);
+  const float limbRadius = kLimbRadiusFactor * seg.handRadiusM;
+  // A near cut is where the limb is nearest (within kNearCutDepthM of its nearest point) and
+  // near the camera (kNearCutMaxDepthM).
+  const float nearCut = std::min(r.nearestPoint.z() + kNearCutDepthM, kNearCutMaxDepthM);
+  int cell = limbEnd.find(grid, k, seed, seg.step, limbRadius, seg.borderMarginPixels, nearCut);
   if (cell < 0) return false;
   end = grid.point(k, cell % grid.width, cell / grid.width);
+  // A forearm seen along its length (a head-mounted camera, the elbow nearest) may be longer
+  // than the ball: the hand then leaves the ball too and the end found lies between it and the
+  // border. Explored again from that end, the ball holds the hand and the fingers end free.
+  for (int round = 0; round < kLimbEndRounds; ++round) {
+    const int next =
+        limbEnd.find(grid, k, cell, seg.step, limbRadius, seg.borderMarginPixels, nearCut);
+    if (next < 0) break;
+    const Vec3 nextEnd = grid.point(k, next % grid.width, next / grid.width);
+    const bool moved = (nextEnd - end).norm() > kLimbEndMoveFactor * seg.handRadiusM;
+    cell = next;
+    end = nextEnd;
+    if (!moved) break;
+  }
   return true;
 }
 

@@ -9,6 +9,12 @@ namespace dynahand::cloud {
 
 namespace {
 enum CellState : std::uint8_t { kUnseen = 0, kSurface = 1, kAttachment = 2 };
+// A surface nearer than find()'s nearCutDepthM that runs into a hole of at least two cells while
+// coming nearer by more than this share of the cell spacing per cell (depth / lateral) leaves
+// the sensor's near range there: an arm reaching past a head-mounted camera, cut off where it
+// comes too near to be measured. Silhouette edges (the surface turning away) and level holes
+// are not cuts.
+constexpr float kNearCutSlope = 0.5f;
 }  // namespace
 
 void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
@@ -21,7 +27,8 @@ void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
 }
 
 int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
-                        const DepthStepRule& rule, float limbRadiusM, int borderMarginPixels) {
+                        const DepthStepRule& rule, float limbRadiusM, int borderMarginPixels,
+                        float nearCutDepthM) {
   const int w = grid.width;
   const int h = grid.height;
   const auto cellCount = static_cast<std::size_t>(w) * h;
@@ -77,9 +84,16 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
     const int c = j * w + i;
     const float z = depth[c];
     bool leaves = atBorder(i, j);
-    const auto visit = [&](int n, int ni, int nj, float spacing) {
+    // n = c + d; back = c - d; beyond = c + 2d (-1 where outside the grid).
+    const auto visit = [&](int n, int ni, int nj, float spacing, int back, int beyond) {
       const auto un = static_cast<std::size_t>(n);
-      if (state_[un] != kUnseen || depth[n] == 0.0f || !joined(z, depth[n], spacing)) return;
+      if (depth[n] == 0.0f) {
+        if (z < nearCutDepthM && back >= 0 && beyond >= 0 && depth[beyond] == 0.0f &&
+            depth[back] > 0.0f && depth[back] - z > kNearCutSlope * spacing * z)
+          leaves = true;  // the limb comes nearer than the sensor's range
+        return;
+      }
+      if (state_[un] != kUnseen || !joined(z, depth[n], spacing)) return;
       if ((point(ni, nj, depth[n]) - centre).squaredNorm() > radius2) {
         leaves = true;
         return;
@@ -87,10 +101,10 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
       state_[un] = kSurface;
       cells_.push_back(pack(ni, nj));
     };
-    if (i > 0) visit(c - 1, i - 1, j, spacingX);
-    if (i + 1 < w) visit(c + 1, i + 1, j, spacingX);
-    if (j > 0) visit(c - w, i, j - 1, spacingY);
-    if (j + 1 < h) visit(c + w, i, j + 1, spacingY);
+    if (i > 0) visit(c - 1, i - 1, j, spacingX, i + 1 < w ? c + 1 : -1, i > 1 ? c - 2 : -1);
+    if (i + 1 < w) visit(c + 1, i + 1, j, spacingX, i > 0 ? c - 1 : -1, i + 2 < w ? c + 2 : -1);
+    if (j > 0) visit(c - w, i, j - 1, spacingY, j + 1 < h ? c + w : -1, j > 1 ? c - 2 * w : -1);
+    if (j + 1 < h) visit(c + w, i, j + 1, spacingY, j > 0 ? c - w : -1, j + 2 < h ? c + 2 * w : -1);
     if (leaves) {
       state_[static_cast<std::size_t>(c)] = kAttachment;
       steps_[static_cast<std::size_t>(c)] = 0;

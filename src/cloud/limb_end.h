@@ -22,11 +22,13 @@ class LimbEndFinder {
 
   // Explores the surface connected to `seed` (neighbours within the step rule) inside a
   // ball of limbRadiusM around the seed's point. Its attachments are the connected cells beyond the
-  // ball and the cells within borderMarginPixels of the image border. Returns the cell of the
-  // surface farthest from every attachment, measured along the surface (m), or -1 when the surface
-  // has no attachment (a hand on its own: its nearest point is fine).
+  // ball, the cells within borderMarginPixels of the image border, and the cells nearer than
+  // nearCutDepthM (m) where the surface, coming nearer, runs into missing data (cut off by the
+  // sensor's near range). Returns the cell of the surface farthest from every attachment, measured
+  // along the surface, or -1 when the surface has no attachment (a hand on its own: its nearest
+  // point is fine).
   int find(const DepthGrid& grid, const Intrinsics& k, int seed, const DepthStepRule& rule,
-           float limbRadiusM, int borderMarginPixels);
+           float limbRadiusM, int borderMarginPixels, float nearCutDepthM);
 
  private:
   std::vector<int> steps_;           // (cells) steps along the surface from an attachment, -1

@@ -85,6 +85,11 @@ void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii,
   const float wristR = 0.75f * radii.wrist * s, elbowR = 0.75f * radii.elbow * s;
   out.push_back({wrist + side * spread, hand.elbow + side * (1.4f * spread), wristR, elbowR});
   out.push_back({wrist - side * spread, hand.elbow - side * (1.4f * spread), wristR, elbowR});
+  if (hand.shoulder) {
+    // Upper arm: one cone as wide as the forearm's two at the elbow, thicker at the shoulder.
+    const float upperR = elbowR + 1.4f * spread;
+    out.push_back({hand.elbow, *hand.shoulder, upperR, 1.2f * upperR});
+  }
 
   assert(out.size() - firstPrimitive <= static_cast<std::size_t>(kMaxHandPrimitives));
   (void)firstPrimitive;

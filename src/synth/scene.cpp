@@ -49,6 +49,17 @@ Pose restPlacement(CameraPlacement placement, float handDistance) {
   return pose;
 }
 
+std::optional<Vec3> shoulderPosition(CameraPlacement placement, bool leftHand) {
+  if (placement != CameraPlacement::HeadMounted) return std::nullopt;
+  constexpr float kShoulderBelowEyes = 0.25f;   // m
+  constexpr float kShoulderBesideEyes = 0.18f;  // m, toward the hand's side
+  constexpr float kShoulderBehindEyes = 0.05f;  // m
+  const Vec3 down = downDirection(placement);
+  const Vec3 forward(0.0f, -std::sin(kHeadMountedPitch), std::cos(kHeadMountedPitch));
+  const float side = leftHand ? -kShoulderBesideEyes : kShoulderBesideEyes;
+  return Vec3(side, 0.0f, 0.0f) + kShoulderBelowEyes * down - kShoulderBehindEyes * forward;
+}
+
 float resolvedHandDistance(const Scene& scene, const SensorProfile& profile) {
   return scene.handDistance > 0.0f ? scene.handDistance : std::max(0.40f, profile.minRange + 0.2f);
 }

@@ -1,6 +1,7 @@
 // Internal: camera placement of the hands and the static background of a scene.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "dynahand/synth.h"
@@ -10,6 +11,11 @@ namespace dynahand::synth::detail {
 // The right hand's rest pose (forearm body frame: x radial, y dorsal, z distal, origin at
 // the wrist) in the camera frame, for a hand at `handDistance` m.
 Pose restPlacement(CameraPlacement placement, float handDistance);
+
+// Where the upper arm of a hand meets the body, camera frame (m): below and beside a
+// head-mounted camera (the right shoulder to the right of the eyes); none for the desk
+// placement, whose elbow is out of view.
+std::optional<Vec3> shoulderPosition(CameraPlacement placement, bool leftHand);
 
 // World "down" in the camera frame (unit).
 Vec3 downDirection(CameraPlacement placement);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <string>
 
 #include "clip_library.h"
@@ -18,6 +19,24 @@ namespace {
 
 constexpr float kReferenceWidth = 0.085f;  // m, SurfaceRadii are given for this palm width
 constexpr float kForearmPerLength = 1.4f;  // forearm length / hand length (elbow beyond the image)
+// Head-mounted playback: the largest angle (rad) between a frame's forearm and the rest
+// placement's. A pose file's 21 keypoints leave the retargeted forearm's direction free within
+// the wrist's limits; seen from the eyes, a forearm swung further would pass in front of the
+// hand or come from above the head.
+constexpr float kHeadForearmCone = 30.0f * std::numbers::pi_v<float> / 180.0f;
+
+// `root` (the forearm, +z from elbow to wrist) turned about the wrist by the least rotation that
+// brings its axis within `cone` (rad) of `axis`; unchanged when it already is.
+Pose withinForearmCone(const Pose& root, const Vec3& axis, float cone) {
+  const Vec3 forearm = root.q * Vec3::UnitZ();
+  const float angle = std::acos(std::clamp(forearm.dot(axis), -1.0f, 1.0f));
+  if (angle <= cone) return root;
+  Vec3 normal = forearm.cross(axis);
+  if (normal.squaredNorm() < 1e-12f) normal = forearm.unitOrthogonal();
+  Pose turned = root;
+  turned.q = (Quat(Eigen::AngleAxisf(angle - cone, normal.normalized())) * root.q).normalized();
+  return turned;
+}
 
 Status validate(const SynthOptions& o) {
   auto bad = [](const std::string& what) { return Status(Error{"synth options: " + what}); };
@@ -150,6 +169,9 @@ struct SyntheticSequence::State {
           playback->size();
       out[0].angles = (*playback)[at];
       out[0].angles.root = playbackPlacement * out[0].angles.root;
+      if (options.scene.placement == CameraPlacement::HeadMounted)
+        out[0].angles.root =
+            withinForearmCone(out[0].angles.root, rest.q * Vec3::UnitZ(), kHeadForearmCone);
       return;
     }
     const float time = static_cast<float>(index) / options.framesPerSecond * options.speed;
@@ -278,6 +300,7 @@ const SyntheticFrame& SyntheticSequence::frame(int index) {
     skeleton.elbow =
         forearm.transform(Vec3(0.0f, 0.0f, -kForearmPerLength * s.options.hand.length));
     skeleton.leftHand = truth.side == model::Side::Left;
+    skeleton.shoulder = detail::shoulderPosition(s.options.scene.placement, skeleton.leftHand);
     skeleton.scale = s.surfaceScale;
     s.surface.clear();
     buildHandSurface(skeleton, s.radii, s.surface);

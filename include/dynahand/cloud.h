@@ -65,7 +65,7 @@ struct SegmentationConfig {
   // 2: at working stride 1, regions grow on every other sample (while those are at most one
   // voxel apart) and the samples between join the region they sit in when on its surface;
   // a quarter of the growing cost (docs/performance.md), edges at the working resolution,
-  // 4 % of the tracker's time at 320x240 and as accurate (docs/tracker.md, session 12).
+  // 4 % of the tracker's time at 320x240 and as accurate (docs/performance.md).
   // 1: every working sample.
   int growStep = 2;
   // Two-hand use: also take the next nearest region when its nearest point is within

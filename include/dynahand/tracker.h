@@ -71,8 +71,8 @@ struct TrackerSettings {
   std::array<bool, kStrategyCount> strategies = {true, true, true, true, true, true};
   // Physics steps per frame per simulation (gross motion and finger flip run twice this,
   // the detector this plus one). 2 with pullForce 7000 N tracks as well as 3 with 4000 N
-  // for 27 % less time; 2 without the stronger pull lost fast motion and finger flips
-  // (docs/tracker.md, sessions 8 and 9).
+  // in less time; 2 with a weaker pull loses fast motion and finger flips (docs/tracker.md,
+  // "Settings").
   int substeps = 2;
   // Each physics step pulls on one of this many interleaved subsets of the sample points,
   // in turn (1 = all points every step): 2 costs 20 % less and tracks as well (3: another
@@ -85,7 +85,7 @@ struct TrackerSettings {
   // Those two bodies hold half the samples (about 345 and 180 of 1140 on the wave clip) for
   // 6 degrees of freedom each; the fingers keep all of theirs. The error metric still
   // measures every point. With the 12 + 3 sweeps below, 15 % less time and as accurate
-  // (docs/tracker.md, session 12).
+  // (docs/tracker.md, "Settings").
   int palmPointCap = 80;
   float stepDt = 1.0f / 60.0f;  // s per physics step
   int iterations = 12;          // Gauss-Seidel sweeps per step of the simulations

@@ -17,8 +17,8 @@
 namespace dynahand::physics {
 namespace {
 constexpr int kSpread = 4;
-// The width of the table that fixed each slot's row order and the mass splitting before
-// session 14 (batches were four wide); kept so that results stay the same.
+// The width of the table that fixes each slot's row order and the mass splitting: four, the
+// width the tracker's tuning was done with (the sweeps themselves are eight wide).
 constexpr int kOrderLanes = 4;
 constexpr int kMinRowsToSplit = 32;  // fewer rows on one slot are never split
 }  // namespace
@@ -130,7 +130,7 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   const int n = static_cast<int>(rows.size());
   // Slots with more than a quarter of the rows are split (see the header), but not small
   // sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster. (A quarter:
-  // the batches were four wide until session 14, and the split decides the results.)
+  // kOrderLanes, and the split decides the results.)
   const int target = std::max(1, (n + kOrderLanes - 1) / kOrderLanes);
   count_.assign(static_cast<std::size_t>(slotCount_), 0);
   for (const PreparedSurfaceRow& r : rows) ++count_[static_cast<std::size_t>(r.slot)];
@@ -213,8 +213,8 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   // Each slot's order: its rows (in input order, i.e. scanline order of the points) taken
   // every kSpread-th, so that Gauss-Seidel alternates between parts of the body instead of
   // sweeping it from one side to the other; then rotated where the same dealing into a table
-  // four wide wraps. Four was the sweep's width before session 14; keeping its order keeps
-  // the results bit for bit (the rotation itself means nothing).
+  // kOrderLanes wide wraps: the order the tracker was tuned with (the rotation itself means
+  // nothing).
   const int orderBatches = std::max((n + kOrderLanes - 1) / kOrderLanes, largest);
   const int batchCount = std::max((n + kLanes - 1) / kLanes, largest);
   batches_.resize(static_cast<std::size_t>(batchCount));

@@ -99,7 +99,7 @@ struct HandSkeleton {
   HandKeypoints keypoints = zeroKeypoints();  // m, camera frame
   Vec3 elbow = Vec3::Zero();                  // m, camera frame: far end of the forearm
   // m, camera frame: where an upper arm from the elbow ends (none when empty). A camera that
-  // sees the elbow (head-mounted) sees the arm go on to the shoulder.
+  // sees the elbow sees the arm go on to the body, not end in mid-air.
   std::optional<Vec3> shoulder;
   bool leftHand = false;  // mirrors the palm normal used for the fingertip pads
   float scale = 1.0f;     // radii multiplier (hand size / reference size)

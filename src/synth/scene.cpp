@@ -49,8 +49,16 @@ Pose restPlacement(CameraPlacement placement, float handDistance) {
   return pose;
 }
 
-std::optional<Vec3> shoulderPosition(CameraPlacement placement, bool leftHand) {
-  if (placement != CameraPlacement::HeadMounted) return std::nullopt;
+Vec3 shoulderPosition(CameraPlacement placement, bool leftHand, float handDistance) {
+  if (placement == CameraPlacement::DeskFacing) {
+    // The user faces the camera: the right shoulder is on the image's left, below the view and
+    // behind the hand.
+    constexpr float kShoulderBelowAxis = 0.45f;   // m
+    constexpr float kShoulderBeside = 0.18f;      // m
+    constexpr float kShoulderBehindHand = 0.30f;  // m
+    return Vec3(leftHand ? kShoulderBeside : -kShoulderBeside, kShoulderBelowAxis,
+                handDistance + kShoulderBehindHand);
+  }
   constexpr float kShoulderBelowEyes = 0.25f;   // m
   constexpr float kShoulderBesideEyes = 0.18f;  // m, toward the hand's side
   constexpr float kShoulderBehindEyes = 0.05f;  // m

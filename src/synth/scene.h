@@ -1,7 +1,6 @@
 // Internal: camera placement of the hands and the static background of a scene.
 #pragma once
 
-#include <optional>
 #include <vector>
 
 #include "dynahand/synth.h"
@@ -12,10 +11,10 @@ namespace dynahand::synth::detail {
 // the wrist) in the camera frame, for a hand at `handDistance` m.
 Pose restPlacement(CameraPlacement placement, float handDistance);
 
-// Where the upper arm of a hand meets the body, camera frame (m): below and beside a
-// head-mounted camera (the right shoulder to the right of the eyes); none for the desk
-// placement, whose elbow is out of view.
-std::optional<Vec3> shoulderPosition(CameraPlacement placement, bool leftHand);
+// Where the upper arm of a hand meets the body, camera frame (m), for a hand at `handDistance`:
+// below and beside a head-mounted camera (the right shoulder to the right of the eyes); below
+// the view and behind the hand of a desk camera facing the user.
+Vec3 shoulderPosition(CameraPlacement placement, bool leftHand, float handDistance);
 
 // World "down" in the camera frame (unit).
 Vec3 downDirection(CameraPlacement placement);

@@ -1,6 +1,7 @@
 // SyntheticSequence: clip (or pose file) -> model joint angles -> forward kinematics ->
 // 21 keypoints + per-body poses (ground truth) -> render surface -> exact depth -> sensor.
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -146,7 +147,8 @@ struct SyntheticSequence::State {
   // Poses played when options.poseFile or poseAngles is set; placed by playbackPlacement.
   std::shared_ptr<const std::vector<model::JointAngles>> playback;
   Pose playbackPlacement;
-  Pose rest;  // right hand's rest placement, camera frame
+  Pose rest;                        // right hand's rest placement, camera frame
+  std::array<Vec3, 2> shoulders{};  // right, left: where the upper arms end, camera frame
   float surfaceScale = 1.0f;
   SurfaceRadii radii;  // options.surface with options.proportions' thickness factors
   DepthRenderer renderer;
@@ -234,6 +236,9 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
 
   const float handDistance = detail::resolvedHandDistance(options.scene, state->profile);
   state->rest = detail::restPlacement(options.scene.placement, handDistance);
+  for (int side = 0; side < 2; ++side)
+    state->shoulders[static_cast<std::size_t>(side)] =
+        detail::shoulderPosition(options.scene.placement, side == 1, handDistance);
   if (state->playback && options.scene.placement == CameraPlacement::HeadMounted) {
     // One rigid transform for the whole sequence: the mean forearm placement of the poses
     // played onto the head-mounted rest placement (desk keeps the file's own placement).
@@ -300,7 +305,7 @@ const SyntheticFrame& SyntheticSequence::frame(int index) {
     skeleton.elbow =
         forearm.transform(Vec3(0.0f, 0.0f, -kForearmPerLength * s.options.hand.length));
     skeleton.leftHand = truth.side == model::Side::Left;
-    skeleton.shoulder = detail::shoulderPosition(s.options.scene.placement, skeleton.leftHand);
+    skeleton.shoulder = s.shoulders[skeleton.leftHand ? 1 : 0];
     skeleton.scale = s.surfaceScale;
     s.surface.clear();
     buildHandSurface(skeleton, s.radii, s.surface);

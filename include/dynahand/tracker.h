@@ -49,6 +49,11 @@ struct DetectorSettings {
   // ... and when the frame-start pose's keypoints are farther than this (m, mean over the
   // confident keypoints) from the detector's: closer, its noise has nothing to add.
   float engageDistanceM = 0.02f;
+  // A detection whose confident keypoints lie farther than this (m, median) from this hand's
+  // nearest sample points is not used: joints lie within a finger's radius of the visible
+  // skin or a hand's thickness behind it, and a detection off the cloud (an arm read as a
+  // hand, a crop around the wrong surface) would pull the hand away from its data.
+  float maxOffCloudM = 0.04f;
   // Loss test: when the tracked keypoints stay farther than disagreeDistanceM (m, mean over
   // the confident keypoints of a detection used as above) from the detector's for
   // disagreeFrames frames in a row, the detector-fit simulation's hand replaces the winner.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <numeric>
 
@@ -136,12 +137,27 @@ void HandTracker::prepareDetectorEvidence(const HandFrame& frame) {
     detectorLabels_.push_back(
         {d->points[i], BodyMask{1} << body, kDetectorLabelCap * d->confidence[i]});
   }
-  if (fitIndices_.size() < kMinFitKeypoints) {
+  if (fitIndices_.size() < kMinFitKeypoints ||
+      medianDistanceToPoints(fitTargets_, frame.points) > s.maxOffCloudM) {
     detectorLabels_.clear();
     confidentKeypoints_.clear();
     return;
   }
   keypoints_ = d;
+}
+
+float HandTracker::medianDistanceToPoints(std::span<const Vec3> keypoints,
+                                          std::span<const Vec3> points) {
+  if (points.empty()) return std::numeric_limits<float>::infinity();
+  offCloud_.clear();
+  for (const Vec3& k : keypoints) {
+    float nearest2 = std::numeric_limits<float>::infinity();
+    for (const Vec3& p : points) nearest2 = std::min(nearest2, (p - k).squaredNorm());
+    offCloud_.push_back(nearest2);
+  }
+  const auto middle = offCloud_.begin() + static_cast<std::ptrdiff_t>(offCloud_.size() / 2);
+  std::nth_element(offCloud_.begin(), middle, offCloud_.end());
+  return std::sqrt(*middle);
 }
 
 bool HandTracker::fitDetectorPose() {

@@ -97,6 +97,9 @@ class HandTracker {
   // the detector; at DetectorSettings::disagreeFrames the detector-fit lane replaces it.
   // Returns the lane to keep.
   const Lane* checkAgainstDetector(const HandFrame& frame, const Lane* best);
+  // Median over `keypoints` of the distance (m) to the nearest of `points`; infinity without
+  // points.
+  float medianDistanceToPoints(std::span<const Vec3> keypoints, std::span<const Vec3> points);
   // A simulator's last nearest bodies over all of the frame's points, for the metric: the
   // simulations' own where they ran on thinned points (palmPointCap), else the frame start's.
   std::span<const int> metricHints(const Simulator& simulator, std::vector<int>& buffer) const;
@@ -137,6 +140,7 @@ class HandTracker {
   bool haveDetectorPose_ = false;
   bool detectorPoseTried_ = false;
   std::vector<int> confidentKeypoints_;  // of the 21, those used this frame
+  std::vector<float> offCloud_;          // medianDistanceToPoints' scratch (m^2)
   const detect::DetectedKeypoints* keypoints_ = nullptr;
   int disagreeFrames_ = 0;
   Keypoints21 scratchKeypoints_{};

@@ -99,6 +99,7 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
   if (!(s.detector.minConfidence >= 0.0f && s.detector.minConfidence <= 1.0f) ||
       !(s.detector.minMeanConfidence >= 0.0f && s.detector.minMeanConfidence <= 1.0f))
     return Error{"detector confidences must be in [0, 1]"};
+  if (!(s.detector.maxOffCloudM > 0.0f)) return Error{"detector maxOffCloudM must be > 0 m"};
   if (!(s.detector.disagreeDistanceM > 0.0f) || s.detector.disagreeFrames < 1)
     return Error{"detector disagreeDistanceM must be > 0 m and disagreeFrames >= 1"};
   if (!keypointDetector) s.detector.enabled = false;

@@ -6,10 +6,12 @@
 
 #include <cmath>
 
+#include "dynahand/cloud.h"
 #include "dynahand/synth.h"
 #include "dynahand/tracker.h"
 #include "synth_support.h"
 #include "test_support.h"
+#include "track/hand_tracker.h"
 
 namespace dynahand::track {
 namespace {
@@ -90,6 +92,39 @@ TEST(DetectorTracking, WithTheShippedDetectorItRunsEveryFrame) {
       e += static_cast<double>((h.detectorKeypoints21[k] - frame.hands[0].keypoints[k]).norm());
     EXPECT_LT(e / 21.0, 0.04) << "frame " << f;  // the detector alone sees a hand
     EXPECT_GT(h.detectorConfidence[0], 0.0f);
+  }
+}
+
+// A detection on the hand is used; the same detection 0.3 m off the hand's points (a crop
+// around the wrong surface) is not (DetectorSettings::maxOffCloudM).
+TEST(DetectorTracking, ADetectionOffTheHandsPointsIsNotUsed) {
+  auto seq = synth::SyntheticSequence::create(test::clipOptions("wave", "tof", 1));
+  ASSERT_TRUE(seq);
+  const synth::SyntheticFrame& frame = seq->frame(0);
+  CloudPipeline pipeline(seq->intrinsics());
+  CloudFrame cloud;
+  ASSERT_TRUE(pipeline.process(frame.depth, cloud).ok());
+  for (const float offset : {0.0f, 0.3f}) {
+    SCOPED_TRACE("offset " + std::to_string(offset));
+    auto hand = HandTracker::create(seq->model(0), model::Side::Right, TrackerSettings{});
+    ASSERT_TRUE(hand) << hand.message();
+    (*hand)->initialize(frame.hands[0].pose);
+    detect::DetectedKeypoints detection;
+    detection.valid = true;
+    for (std::size_t k = 0; k < 21; ++k) {
+      detection.points[k] = frame.hands[0].keypoints[k] + Vec3(offset, 0.0f, 0.0f);
+      detection.confidence[k] = 0.9f;
+    }
+    detection.meanConfidence = 0.9f;
+    HandFrame in;
+    in.points = cloud.points;
+    in.planes = cloud.planes;
+    in.cloud = &cloud;
+    in.keypoints = &detection;
+    HandResult out;
+    (*hand)->track(in, out);
+    EXPECT_TRUE(out.tracked);
+    EXPECT_EQ(out.detected, offset == 0.0f);
   }
 }
 

@@ -27,6 +27,7 @@ struct BenchOptions {
   std::string data;  // default: ../shared/data from the working folder or the source tree
   int threads = 1, frames = 0;
   bool quick = false;
+  bool noDetector = false;  // every item without the learned detector (an ablation)
 };
 
 // ../shared/data beside the working folder, else beside the source tree this was built from.
@@ -138,6 +139,13 @@ std::string runLine(const SuiteRun& run, int threads) {
       threads > 1 ? " (items run in parallel; each item's frames on one thread)" : "");
 }
 
+// The items as the options ask: without the learned detector when --no-detector.
+std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const BenchOptions& o) {
+  if (o.noDetector)
+    for (eval::SuiteItem& item : items) item.tracker.detector.enabled = false;
+  return items;
+}
+
 int runBench(const BenchOptions& o, const std::string& commandLine) {
   const bool motion = o.suite != "standard", standard = o.suite != "motion";
   const std::string machineBefore = machineLine();
@@ -156,7 +164,7 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
     Result<eval::MotionSuite> suite = eval::motionSuite(options);
     if (!suite) throw std::runtime_error(suite.message());
     if (!suite->skipped.empty()) std::printf("bench motion: %s\n", suite->skipped.c_str());
-    Result<SuiteRun> run = runItems("motion", suite->items, o.threads);
+    Result<SuiteRun> run = runItems("motion", asAsked(suite->items, o), o.threads);
     if (!run) throw std::runtime_error(run.message());
     const auto rows = eval::summarizeSuite(run->results);
     std::printf("\n%s", eval::motionTableText(rows).c_str());
@@ -173,7 +181,8 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
     eval::SuiteOptions options;
     options.quick = o.quick;
     options.frames = o.frames;
-    Result<SuiteRun> run = runItems("standard", eval::standardSuite(options), o.threads);
+    Result<SuiteRun> run =
+        runItems("standard", asAsked(eval::standardSuite(options), o), o.threads);
     if (!run) throw std::runtime_error(run.message());
     const auto rows = eval::summarizeSuite(run->results);
     std::printf("\n%s", eval::suiteTableText(rows).c_str());
@@ -226,6 +235,8 @@ const CommandRegistration kBenchCommand{Command{
                      "items run in parallel (each item on one thread: per-frame times stay "
                      "single-core while threads <= idle cores)")
           ->check(CLI::Range(1, 64));
+      sub.add_flag("--no-detector", o->noDetector,
+                   "every item without the learned detector (the paper's simulations only)");
       sub.add_option("--markdown", o->markdown,
                      "Markdown report ('' to skip; default docs/benchmarks.md for --suite all, "
                      "none for one suite)")
@@ -235,6 +246,7 @@ const CommandRegistration kBenchCommand{Command{
           "  dynahand bench --threads 2                      # both suites, docs/benchmarks.md\n"
           "  dynahand bench --suite motion --threads 2       # the motion suite, table only\n"
           "  dynahand bench --suite motion --data ../shared/data --markdown /tmp/motion.md\n"
+          "  dynahand bench --suite motion --threads 2 --no-detector   # without the detector\n"
           "  dynahand bench --quick --markdown /tmp/bench.md");
       return [o] {
         std::string line = "dynahand bench";
@@ -242,6 +254,7 @@ const CommandRegistration kBenchCommand{Command{
         if (o->quick) line += " --quick";
         if (o->frames > 0) line += " --frames " + std::to_string(o->frames);
         if (o->threads > 1) line += " --threads " + std::to_string(o->threads);
+        if (o->noDetector) line += " --no-detector";
         return runBench(*o, line);
       };
     }}};

@@ -21,6 +21,8 @@ namespace dynahand::detect {
 namespace {
 
 constexpr float kForearmPerLength = 1.4f;  // as the synthesiser: elbow beyond the image
+// Cosine of the least angle between the forearm (toward the elbow) and the line of sight.
+constexpr float kArmTowardCameraCos = 0.9f;
 constexpr float kReferenceWidth = 0.085f;  // SurfaceRadii are for this palm width
 constexpr std::uint32_t kFormatVersion = 1;
 constexpr char kMagic[4] = {'D', 'H', 'K', 'D'};
@@ -221,12 +223,14 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
   const float u = uniform(rng, 0.15f, 0.85f) * static_cast<float>(k.width);
   const float v = uniform(rng, 0.15f, 0.85f) * static_cast<float>(k.height);
   const Vec3 target = k.deproject(u, v, z);
-  // Any orientation whose forearm does not point at the camera.
+  // Any orientation whose forearm does not point straight at the camera: within 25 degrees of
+  // it the arm would hide the hand. Forearms coming toward the camera (a head-mounted view, the
+  // back of the hand seen over the arm) are included.
   Quat rotation;
   for (int tries = 0;; ++tries) {
     rotation = randomRotation(rng);
     const Vec3 arm = rotation * Vec3(0.0f, 0.0f, -1.0f);  // palm frame: forearm along -z
-    if (arm.dot(-target.normalized()) < 0.6f || tries > 20) break;
+    if (arm.dot(-target.normalized()) < kArmTowardCameraCos || tries > 20) break;
   }
   int source = 0;
   float scale = 1.0f;

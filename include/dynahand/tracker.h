@@ -74,10 +74,10 @@ struct TrackerSettings {
   int threads = 1;
   // Strategies to run, by StrategyKind (ablations switch some off).
   std::array<bool, kStrategyCount> strategies = {true, true, true, true, true, true};
-  // Physics steps per frame per simulation (gross motion and finger flip run twice this,
-  // the detector this plus one). 2 with pullForce 7000 N tracks as well as 3 with 4000 N
-  // in less time; 2 with a weaker pull loses fast motion and finger flips (docs/tracker.md,
-  // "Settings").
+  // Physics steps per frame per simulation (gross motion, finger flip and the detector fit
+  // run twice this, feature detection this plus one). 2 with pullForce 7000 N tracks as well as 3
+  // with 4000 N in less time; 2 with a weaker pull loses fast motion and finger flips
+  // (docs/tracker.md, "Settings").
   int substeps = 2;
   // Each physics step pulls on one of this many interleaved subsets of the sample points,
   // in turn (1 = all points every step): 2 costs 20 % less and tracks as well (3: another

@@ -21,6 +21,11 @@ Quat fromAxes(const Vec3& x, const Vec3& y, const Vec3& z) {
   return Quat(m).normalized();
 }
 
+// World-horizontal forward (away from the eyes) in the head-mounted camera's frame.
+Vec3 headForward() {
+  return Vec3(0.0f, -std::sin(kHeadMountedPitch), std::cos(kHeadMountedPitch));
+}
+
 }  // namespace
 
 Vec3 downDirection(CameraPlacement placement) {
@@ -40,9 +45,8 @@ Pose restPlacement(CameraPlacement placement, float handDistance) {
   } else {
     // Palm down, fingers forward, seen from behind and above: the back of the hand faces
     // the camera and the forearm comes up from the bottom border.
-    const Vec3 down = downDirection(placement);
-    const Vec3 forward(0.0f, -std::sin(kHeadMountedPitch), std::cos(kHeadMountedPitch));
-    const Vec3 dorsal = -down;
+    const Vec3 forward = headForward();
+    const Vec3 dorsal = -downDirection(placement);
     pose.q = fromAxes(dorsal.cross(forward), dorsal, forward);
     pose.p = Vec3(0.0f, 0.06f, handDistance);
   }
@@ -62,10 +66,9 @@ Vec3 shoulderPosition(CameraPlacement placement, bool leftHand, float handDistan
   constexpr float kShoulderBelowEyes = 0.25f;   // m
   constexpr float kShoulderBesideEyes = 0.18f;  // m, toward the hand's side
   constexpr float kShoulderBehindEyes = 0.05f;  // m
-  const Vec3 down = downDirection(placement);
-  const Vec3 forward(0.0f, -std::sin(kHeadMountedPitch), std::cos(kHeadMountedPitch));
   const float side = leftHand ? -kShoulderBesideEyes : kShoulderBesideEyes;
-  return Vec3(side, 0.0f, 0.0f) + kShoulderBelowEyes * down - kShoulderBehindEyes * forward;
+  return Vec3(side, 0.0f, 0.0f) + kShoulderBelowEyes * downDirection(placement) -
+         kShoulderBehindEyes * headForward();
 }
 
 float resolvedHandDistance(const Scene& scene, const SensorProfile& profile) {

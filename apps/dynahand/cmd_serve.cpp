@@ -75,10 +75,13 @@ int runServe(ServeCommandOptions o) {
     }
   }
   const viewer::ServerStats stats = server->stats();
-  std::printf("frames %d  sent %llu  dropped for slow clients %llu  rejected messages %llu\n",
-              (*session)->framesTracked(), static_cast<unsigned long long>(stats.framesSent),
-              static_cast<unsigned long long>(stats.framesDropped),
-              static_cast<unsigned long long>(stats.messagesRejected));
+  std::printf(
+      "frames %d  sent %llu  dropped for slow clients %llu  rejected messages %llu  refused "
+      "connections %llu\n",
+      (*session)->framesTracked(), static_cast<unsigned long long>(stats.framesSent),
+      static_cast<unsigned long long>(stats.framesDropped),
+      static_cast<unsigned long long>(stats.messagesRejected),
+      static_cast<unsigned long long>(stats.connectionsRefused));
   return interrupted() ? 130 : kExitOk;
 }
 
@@ -109,7 +112,9 @@ const CommandRegistration kServeCommand{Command{
       sub.add_option("--web-root", o->webRoot, "serve the page from this folder instead");
       sub.footer(
           "Open the printed address in a browser. Other programs can read the stream: see\n"
-          "docs/formats/viewer-stream.md and examples/python/dynahand_client.py.\n"
+          "docs/formats/viewer-stream.md and examples/python/dynahand_client.py. The stream\n"
+          "opens only for the page's own origin or with the token printed at start\n"
+          "(?token=...).\n"
           "Examples:\n"
           "  dynahand serve synth:wave\n"
           "  dynahand serve synth:pinch --init gt --port 9000\n"

@@ -206,15 +206,17 @@ Status ServeSession::step(ViewerServer* server, bool paused) {
 void printViewerAddress(const ServerOptions& options, const ViewerServer& server,
                         const std::string& webRoot) {
   const std::string address = options.host + ":" + std::to_string(server.port());
+  const std::string query = "?token=" + server.token();
   if (server.pageAvailable()) {
-    std::printf("viewer at http://%s/  stream at ws://%s/\n", address.c_str(), address.c_str());
+    std::printf("viewer at http://%s/%s  stream at ws://%s/%s\n", address.c_str(), query.c_str(),
+                address.c_str(), query.c_str());
   } else {
     const std::string why =
         webRoot.empty()
             ? "this build had no web/node_modules; run scripts/install-deps.sh and rebuild"
             : "no index.html in " + webRoot;
-    std::printf("stream at ws://%s/  (viewer page unavailable: %s)\n", address.c_str(),
-                why.c_str());
+    std::printf("stream at ws://%s/%s  (viewer page unavailable: %s)\n", address.c_str(),
+                query.c_str(), why.c_str());
   }
   std::fflush(stdout);
 }

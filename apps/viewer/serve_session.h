@@ -30,8 +30,9 @@ struct ServeOptions {
 // installed copy beside the program (bin/../share/dynahand/viewer), else the build tree's;
 // empty when there is none (the server then streams without its page).
 std::filesystem::path findViewerPage(const std::string& webRoot = {});
-// The line a command prints once its server listens: the page's and the stream's address,
-// or why the page is unavailable (webRoot: what the user passed with --web-root, or empty).
+// The line a command prints once its server listens: the page's and the stream's address
+// with the run's token ("?token=..."), or why the page is unavailable (webRoot: what the
+// user passed with --web-root, or empty).
 void printViewerAddress(const ServerOptions& options, const ViewerServer& server,
                         const std::string& webRoot);
 

@@ -8,11 +8,14 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <random>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <thread>
 #include <utility>
 
@@ -52,6 +55,72 @@ const char* kPageUnavailable =
     "<code>scripts/install-deps.sh</code> (it runs <code>npm ci</code> in web/) and rebuild. "
     "The WebSocket stream on this port works without it (docs/formats/viewer-stream.md).</p>";
 
+// 128 bits from the system's random source as 32 lowercase hex digits.
+std::string randomToken() {
+  static const char* const kHex = "0123456789abcdef";
+  std::random_device device;
+  std::string token;
+  for (int word = 0; word < 4; ++word) {
+    const std::uint32_t bits = static_cast<std::uint32_t>(device());
+    for (int shift = 28; shift >= 0; shift -= 4) token += kHex[(bits >> shift) & 0xFu];
+  }
+  return token;
+}
+
+// The value of "token" in a request target's query ("/?token=..."); empty when absent.
+std::string queryToken(const std::string& resource) {
+  const std::size_t query = resource.find('?');
+  if (query == std::string::npos) return {};
+  const std::string_view all(resource);
+  for (std::size_t begin = query + 1; begin <= all.size();) {
+    std::size_t end = all.find('&', begin);
+    if (end == std::string_view::npos) end = all.size();
+    const std::string_view item = all.substr(begin, end - begin);
+    if (item.substr(0, 6) == "token=") return std::string(item.substr(6));
+    begin = end + 1;
+  }
+  return {};
+}
+
+// Compares every character whatever the first difference, so the time taken does not tell
+// how much of a guessed token was right.
+bool sameSecret(const std::string& a, const std::string& b) {
+  if (a.size() != b.size()) return false;
+  unsigned diff = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    diff |=
+        static_cast<unsigned>(static_cast<unsigned char>(a[i]) ^ static_cast<unsigned char>(b[i]));
+  }
+  return diff == 0;
+}
+
+std::string lowercase(std::string text) {
+  for (char& c : text) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return text;
+}
+
+// A header value fit for a one-line log message: printable ASCII, at most 100 characters.
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char c : text.substr(0, 100)) out += (c >= ' ' && c <= '~') ? c : '?';
+  return text.size() > 100 ? out + "..." : out;
+}
+
+// The origins a browser sends for a page served by this server: http://HOST:PORT for
+// 127.0.0.1, localhost and the bind address (as given and in canonical form; IPv6 in
+// brackets). Browsers leave out port 80.
+std::vector<std::string> pageOrigins(const std::vector<std::string>& hosts, int port) {
+  const std::string suffix = port == 80 ? "" : ":" + std::to_string(port);
+  std::vector<std::string> origins;
+  for (const std::string& host : hosts) {
+    const bool v6 = host.find(':') != std::string::npos;
+    origins.push_back("http://" + lowercase(v6 ? "[" + host + "]" : host) + suffix);
+  }
+  return origins;
+}
+
 }  // namespace
 
 struct ViewerServer::Impl {
@@ -60,6 +129,8 @@ struct ViewerServer::Impl {
   std::thread ioThread;
   int boundPort = 0;
   bool page = false;
+  std::string token;                     // set before the I/O thread starts, then read-only
+  std::vector<std::string> pageOrigins;  // likewise
 
   // Touched only on the I/O thread.
   std::set<Handle, std::owner_less<Handle>> clients;
@@ -118,6 +189,33 @@ struct ViewerServer::Impl {
     }
     std::lock_guard<std::mutex> lock(mutex);
     commands.push_back(command);
+  }
+
+  // Before a WebSocket upgrade is answered: the page's own origin or this run's token, else
+  // 403 and one line on stderr.
+  bool onValidate(Handle h) {
+    auto con = server.get_con_from_hdl(h);
+    const std::string& origin = con->get_request_header("Origin");
+    if (!origin.empty() &&
+        std::find(pageOrigins.begin(), pageOrigins.end(), lowercase(origin)) != pageOrigins.end()) {
+      return true;
+    }
+    const std::string given = queryToken(con->get_resource());
+    if (!given.empty() && sameSecret(given, token)) return true;
+    const std::string why =
+        (origin.empty() ? std::string("no Origin header")
+                        : "origin " + printable(origin) + " is not the page's") +
+        (given.empty() ? ", no token" : ", wrong token");
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      ++stats.connectionsRefused;
+    }
+    std::fprintf(stderr, "viewer: refused a WebSocket connection from %s: %s\n",
+                 printable(con->get_remote_endpoint()).c_str(), why.c_str());
+    con->set_status(websocketpp::http::status_code::forbidden);
+    con->append_header("Content-Type", "text/plain");
+    con->set_body("WebSocket refused: " + why + ". Add the ?token=... dynahand printed.\n");
+    return false;
   }
 
   void onOpen(Handle h) {
@@ -217,6 +315,12 @@ std::unique_ptr<ViewerServer> ViewerServer::start(const ServerOptions& options,
   Impl* p = impl.get();
   p->options = options;
   p->page = !options.webRoot.empty() && std::filesystem::exists(options.webRoot / "index.html");
+  try {
+    p->token = randomToken();
+  } catch (const std::exception& e) {  // std::random_device has no source
+    if (error) *error = std::string("no random source for the viewer's token: ") + e.what();
+    return nullptr;
+  }
   WsServer& s = p->server;
   s.clear_access_channels(websocketpp::log::alevel::all);
   s.clear_error_channels(websocketpp::log::elevel::all);
@@ -232,6 +336,7 @@ std::unique_ptr<ViewerServer> ViewerServer::start(const ServerOptions& options,
   s.set_close_handler([p](Handle h) { p->onClose(h); });
   s.set_message_handler([p](Handle h, WsServer::message_ptr m) { p->onMessage(h, m); });
   s.set_http_handler([p](Handle h) { p->onHttp(h); });
+  s.set_validate_handler([p](Handle h) { return p->onValidate(h); });
   // A small kernel send buffer keeps a slow client's backlog in our queue, where it is
   // counted and frames are skipped, instead of megabytes of stale frames in the kernel.
   s.set_socket_init_handler([p](Handle, asio::ip::tcp::socket& socket) {
@@ -258,6 +363,8 @@ std::unique_ptr<ViewerServer> ViewerServer::start(const ServerOptions& options,
     return nullptr;
   }
   p->boundPort = s.get_local_endpoint(ec).port();
+  p->pageOrigins =
+      pageOrigins({"127.0.0.1", "localhost", options.host, address.to_string()}, p->boundPort);
   p->ioThread = std::thread([p] { p->server.run(); });
   return std::unique_ptr<ViewerServer>(new ViewerServer(std::move(impl)));
 }
@@ -281,6 +388,9 @@ ViewerServer::~ViewerServer() {
 
 int ViewerServer::port() const {
   return impl_->boundPort;
+}
+const std::string& ViewerServer::token() const {
+  return impl_->token;
 }
 bool ViewerServer::pageAvailable() const {
   return impl_->page;

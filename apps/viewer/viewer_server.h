@@ -6,6 +6,12 @@
 // well-formed commands are queued for the producer, anything else is refused and only
 // that client is answered (or closed).
 //
+// Only the page's own origin or a holder of this run's token may open the WebSocket: a
+// browser's Origin must be http://127.0.0.1:PORT, http://localhost:PORT or
+// http://HOST:PORT (HOST = ServerOptions::host), otherwise the upgrade request must carry
+// the token as a query parameter ("/?token=..."); so must a client that sends no Origin.
+// Anything else is answered 403 and logged on stderr (one line).
+//
 // websocketpp 0.8 does not compile as C++20, so viewer_server.cpp is built as C++17 and
 // this header uses nothing newer (no dynahand headers).
 #pragma once
@@ -33,11 +39,12 @@ struct ServerOptions {
 enum class ClientCommand { Pause, Resume, Step };
 
 struct ServerStats {
-  int clients = 0;                     // connected WebSocket clients now
-  std::uint64_t framesPublished = 0;   // publish() calls
-  std::uint64_t framesSent = 0;        // frame messages queued to a client
-  std::uint64_t framesDropped = 0;     // frames a client skipped because it was behind
-  std::uint64_t messagesRejected = 0;  // malformed, unknown or oversized client messages
+  int clients = 0;                       // connected WebSocket clients now
+  std::uint64_t framesPublished = 0;     // publish() calls
+  std::uint64_t framesSent = 0;          // frame messages queued to a client
+  std::uint64_t framesDropped = 0;       // frames a client skipped because it was behind
+  std::uint64_t messagesRejected = 0;    // malformed, unknown or oversized client messages
+  std::uint64_t connectionsRefused = 0;  // WebSocket upgrades refused (origin, token)
 };
 
 class ViewerServer {
@@ -51,6 +58,9 @@ class ViewerServer {
 
   int port() const;            // the bound port
   bool pageAvailable() const;  // webRoot holds index.html
+  // This run's token: 128 bits from std::random_device as 32 hex digits, new at every
+  // start(). Clients that are not the page send it as "/?token=..." (see above).
+  const std::string& token() const;
   // Messages every client gets first, in order, when it connects (e.g. "hello" with the
   // model's body shapes, a "scene"). Replaces the previous set; clients connected now
   // get the new set at once.

@@ -26,7 +26,7 @@ namespace {
 // A viewer that reads and discards everything (a browser tab that keeps up).
 class DrainingClient {
  public:
-  explicit DrainingClient(int port) {
+  DrainingClient(int port, const std::string& token) {
     fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
     sockaddr_in address{};
     address.sin_family = AF_INET;
@@ -34,8 +34,10 @@ class DrainingClient {
     address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     if (::connect(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) return;
     // The RFC 6455 sample key; the client never needs to check the server's answer here.
+    // Not the page, so it presents the server's token.
     const std::string request =
-        "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        "GET /?token=" + token +
+        " HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
         "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
     if (::send(fd_, request.data(), request.size(), 0) != static_cast<ssize_t>(request.size())) {
       return;
@@ -87,7 +89,7 @@ void BM_TrackAndServe(benchmark::State& state) {
   server->setWelcome({(*session)->hello()});
   std::unique_ptr<DrainingClient> client;
   if (withViewer) {
-    client = std::make_unique<DrainingClient>(server->port());
+    client = std::make_unique<DrainingClient>(server->port(), server->token());
     for (int i = 0; i < 200 && !server->hasClients(); ++i) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }

@@ -5,8 +5,12 @@ Standard library only: the WebSocket opening handshake and framing (RFC 6455) ar
 hand below, so this file can be copied anywhere. The messages are described in
 docs/formats/viewer-stream.md.
 
-    dynahand serve synth:wave &
-    python3 examples/python/dynahand_client.py --port 8080 --frames 30
+    dynahand serve synth:wave &     # prints: ... stream at ws://127.0.0.1:8080/?token=...
+    python3 examples/python/dynahand_client.py --url 'ws://127.0.0.1:8080/?token=...' --frames 30
+    python3 examples/python/dynahand_client.py --port 8080 --token ... --frames 30
+
+The server lets in only its own page and clients that present the token it printed at start
+(docs/commands.md, "dynahand serve"); without it the handshake is refused with 403.
 """
 
 import argparse
@@ -17,6 +21,7 @@ import os
 import socket
 import struct
 import sys
+import urllib.parse
 
 WEBSOCKET_GUID = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11"  # fixed by RFC 6455
 INDEX_TIP = 8  # keypoints21 index of the index fingertip (MediaPipe order)
@@ -26,8 +31,12 @@ MAX_MESSAGE_BYTES = 64 << 20  # refuse anything larger than a sane frame
 class WebSocket:
     """A minimal client: text messages in, masked text frames out, ping answered."""
 
-    def __init__(self, host, port, path="/", timeout=10.0, sock=None):
-        """sock: an unconnected socket to use (e.g. with options set); default a new one."""
+    def __init__(self, host, port, path="/", timeout=10.0, sock=None, token=None, origin=None):
+        """token: the server's per-run token, added to the path as ?token=...; origin: an
+        Origin header to send (browsers do; this client normally does not). sock: an
+        unconnected socket to use (e.g. with options set); default a new one."""
+        if token:
+            path += ("&" if "?" in path else "?") + "token=" + urllib.parse.quote(token, safe="")
         if sock is None:
             self.sock = socket.create_connection((host, port), timeout=timeout)
         else:
@@ -37,14 +46,19 @@ class WebSocket:
         key = base64.b64encode(os.urandom(16)).decode()
         request = (
             f"GET {path} HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
-            f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n"
+            f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n"
         )
-        self.sock.sendall(request.encode())
+        if origin:
+            request += f"Origin: {origin}\r\n"
+        self.sock.sendall((request + "\r\n").encode())
         self.buffer = b""
         header = self._read_until(b"\r\n\r\n").decode("latin-1")
         status = header.split("\r\n", 1)[0]
         if " 101 " not in status + " ":
-            raise ConnectionError(f"handshake refused: {status}")
+            self.sock.close()
+            reason = self.buffer.decode("latin-1").strip().split("\n")[0][:300]
+            raise ConnectionError(f"handshake refused: {status}: {reason}" if reason
+                                  else f"handshake refused: {status}")
         expected = base64.b64encode(hashlib.sha1((key + WEBSOCKET_GUID).encode()).digest()).decode()
         accept = [
             line.split(":", 1)[1].strip()
@@ -124,12 +138,26 @@ class WebSocket:
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--url", help="the stream address dynahand printed, "
+                        "ws://HOST:PORT/?token=... (instead of --host, --port and --token)")
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=8080)
+    parser.add_argument("--token", help="the token dynahand printed (its ?token=...)")
     parser.add_argument("--frames", type=int, default=0, help="stop after this many frames")
     args = parser.parse_args()
 
-    ws = WebSocket(args.host, args.port)
+    host, port, path = args.host, args.port, "/"
+    if args.url:
+        url = urllib.parse.urlsplit(args.url)
+        if url.scheme not in ("ws", "http") or not url.hostname:
+            parser.error(f"--url: expected ws://HOST:PORT/?token=..., got {args.url}")
+        host, port = url.hostname, url.port or 80
+        path = (url.path or "/") + (f"?{url.query}" if url.query else "")
+    try:
+        ws = WebSocket(host, port, path=path, token=args.token)
+    except (ConnectionError, OSError) as error:
+        print(f"dynahand_client: {host}:{port}: {error}", file=sys.stderr)
+        return 1
     frames = 0
     try:
         while args.frames == 0 or frames < args.frames:

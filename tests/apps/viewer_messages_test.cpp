@@ -1,7 +1,17 @@
 // The viewer stream's messages (docs/formats/viewer-stream.md) and the server's local
-// behaviour; the stream end to end is viewer_stream_test.py, the page browser_test.mjs.
+// behaviour (who may open the WebSocket included); the stream end to end is
+// viewer_stream_test.py, the page browser_test.mjs.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
+
+#include <cctype>
+#include <chrono>
+#include <thread>
 
 #include "dynahand/synth.h"
 #include "dynahand/track_io.h"
@@ -134,6 +144,168 @@ TEST(ViewerServer, ReportsAPortInUseAndABadHost) {
   options.host = "not-an-address";
   EXPECT_FALSE(ViewerServer::start(options, &error));
   EXPECT_NE(error.find("--host"), std::string::npos) << error;
+}
+
+// One WebSocket opening handshake by hand (the RFC 6455 sample key): what the server answers
+// and whether it then closes the connection.
+struct Handshake {
+  std::string status;   // the response's first line, e.g. "HTTP/1.1 101 Switching Protocols"
+  bool closed = false;  // the server closed the connection after its answer
+};
+
+Handshake handshake(const std::string& address, int port, const std::string& target,
+                    const std::string& origin) {
+  Handshake result;
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return result;
+  timeval timeout{5, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  ::inet_pton(AF_INET, address.c_str(), &to.sin_addr);
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&to), sizeof to) != 0) {
+    ::close(fd);
+    return result;
+  }
+  std::string request =
+      "GET " + target + " HTTP/1.1\r\nHost: " + address + ":" + std::to_string(port) +
+      "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+      "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n";
+  if (!origin.empty()) request += "Origin: " + origin + "\r\n";
+  request += "\r\n";
+  if (::send(fd, request.data(), request.size(), 0) != static_cast<ssize_t>(request.size())) {
+    ::close(fd);
+    return result;
+  }
+  std::string answer;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
+    if (n <= 0) {
+      result.closed = n == 0;
+      break;
+    }
+    answer.append(buffer, static_cast<std::size_t>(n));
+    // A 101 keeps the connection open: stop at the end of its head.
+    if (answer.rfind("HTTP/1.1 101", 0) == 0 && answer.find("\r\n\r\n") != std::string::npos) {
+      break;
+    }
+  }
+  result.status = answer.substr(0, answer.find("\r\n"));
+  ::close(fd);
+  return result;
+}
+
+bool accepted(const Handshake& h) {
+  return h.status.rfind("HTTP/1.1 101", 0) == 0;
+}
+bool forbidden(const Handshake& h) {
+  return h.status.rfind("HTTP/1.1 403", 0) == 0 && h.closed;
+}
+
+std::unique_ptr<ViewerServer> startOnAnyPort(const std::string& host = "127.0.0.1") {
+  ServerOptions options;
+  options.host = host;
+  options.port = 0;
+  std::string error;
+  auto server = ViewerServer::start(options, &error);
+  EXPECT_TRUE(server) << error;
+  return server;
+}
+
+TEST(ViewerServer, TokenIs128RandomBitsInHex) {
+  auto first = startOnAnyPort();
+  auto second = startOnAnyPort();
+  ASSERT_TRUE(first && second);
+  EXPECT_EQ(first->token().size(), 32u);
+  for (const char c : first->token()) EXPECT_TRUE(std::isxdigit(static_cast<unsigned char>(c)));
+  EXPECT_NE(first->token(), second->token());
+}
+
+TEST(ViewerServer, RefusesAWebSocketFromAnotherOrigin) {
+  auto server = startOnAnyPort();
+  ASSERT_TRUE(server);
+  const int port = server->port();
+  const std::string own = std::to_string(port);
+  for (const std::string& origin :
+       {std::string("http://evil.example.com"), "http://evil.example.com:" + own,
+        std::string("http://127.0.0.1:1"), "https://127.0.0.1:" + own,
+        "http://127.0.0.1:" + own + ".evil.example.com", std::string("null")}) {
+    const Handshake h = handshake("127.0.0.1", port, "/", origin);
+    EXPECT_TRUE(forbidden(h)) << origin << ": " << h.status;
+    EXPECT_FALSE(accepted(h)) << origin;
+  }
+  EXPECT_FALSE(server->hasClients());
+  EXPECT_EQ(server->stats().connectionsRefused, 6u);
+}
+
+TEST(ViewerServer, AcceptsThePagesOwnOrigin) {
+  auto server = startOnAnyPort();
+  ASSERT_TRUE(server);
+  const std::string own = std::to_string(server->port());
+  for (const std::string& origin : {"http://127.0.0.1:" + own, "http://localhost:" + own}) {
+    const Handshake h = handshake("127.0.0.1", server->port(), "/", origin);
+    EXPECT_TRUE(accepted(h)) << origin << ": " << h.status;
+  }
+  EXPECT_EQ(server->stats().connectionsRefused, 0u);
+}
+
+TEST(ViewerServer, AcceptsTheOriginOfTheHostItWasGiven) {
+  ServerOptions options;
+  options.host = "127.0.0.2";  // Linux answers on all of 127/8
+  options.port = 0;
+  std::string error;
+  auto server = ViewerServer::start(options, &error);
+  if (!server) GTEST_SKIP() << "cannot listen on 127.0.0.2: " << error;
+  const std::string own = std::to_string(server->port());
+  EXPECT_TRUE(accepted(handshake("127.0.0.2", server->port(), "/", "http://127.0.0.2:" + own)));
+  EXPECT_TRUE(accepted(handshake("127.0.0.2", server->port(), "/", "http://127.0.0.1:" + own)));
+  EXPECT_TRUE(forbidden(handshake("127.0.0.2", server->port(), "/", "http://127.0.0.3:" + own)));
+}
+
+TEST(ViewerServer, ClientsWithoutTheOriginNeedTheToken) {
+  auto server = startOnAnyPort();
+  ASSERT_TRUE(server);
+  const int port = server->port();
+  const std::string token = server->token();
+  std::string wrong = token;
+  wrong[0] = wrong[0] == '0' ? '1' : '0';
+  EXPECT_TRUE(forbidden(handshake("127.0.0.1", port, "/", "")));
+  EXPECT_TRUE(forbidden(handshake("127.0.0.1", port, "/?token=", "")));
+  EXPECT_TRUE(forbidden(handshake("127.0.0.1", port, "/?token=" + wrong, "")));
+  EXPECT_TRUE(forbidden(handshake("127.0.0.1", port, "/?token=" + token + "0", "")));
+  EXPECT_TRUE(
+      forbidden(handshake("127.0.0.1", port, "/?token=" + wrong, "http://evil.example.com")));
+  EXPECT_EQ(server->stats().connectionsRefused, 5u);
+  EXPECT_TRUE(accepted(handshake("127.0.0.1", port, "/?token=" + token, "")));
+  EXPECT_TRUE(accepted(handshake("127.0.0.1", port, "/?x=1&token=" + token, "")));
+  // The token lets a page served elsewhere in (what the page's own ?token= is for).
+  EXPECT_TRUE(
+      accepted(handshake("127.0.0.1", port, "/?token=" + token, "http://evil.example.com")));
+  EXPECT_EQ(server->stats().connectionsRefused, 5u);
+}
+
+TEST(ViewerServer, AnAcceptedClientIsCounted) {
+  auto server = startOnAnyPort();
+  ASSERT_TRUE(server);
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(server->port()));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<const sockaddr*>(&to), sizeof to), 0);
+  const std::string request =
+      "GET /?token=" + server->token() +
+      " HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\n"
+      "Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+      "Sec-WebSocket-Version: 13\r\n\r\n";
+  ASSERT_EQ(::send(fd, request.data(), request.size(), 0), static_cast<ssize_t>(request.size()));
+  for (int i = 0; i < 200 && !server->hasClients(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_TRUE(server->hasClients());
+  ::close(fd);
 }
 
 }  // namespace

@@ -390,11 +390,22 @@ function setStatus(text, error = false) {
   status.textContent = text;
   status.className = error ? 'error' : '';
 }
+// The run's token, when the page's address carries it (dynahand prints the page's address
+// as http://HOST:PORT/?token=...). The server lets the page's own origin in without it; a
+// page opened at any other address needs it (docs/commands.md, "dynahand serve").
+const token = new URLSearchParams(location.search).get('token');
+let everConnected = false;
 function connect() {
-  socket = new WebSocket(`ws://${location.host}/`);
-  socket.onopen = () => setStatus('connected');
+  const query = token ? `?token=${encodeURIComponent(token)}` : '';
+  socket = new WebSocket(`ws://${location.host}/${query}`);
+  socket.onopen = () => {
+    everConnected = true;
+    setStatus('connected');
+  };
   socket.onclose = () => {
-    setStatus('disconnected; retrying…', true);
+    setStatus(everConnected ? 'disconnected; retrying…'
+      : 'cannot connect (is dynahand still running? from this address the page needs the ' +
+        '?token= dynahand printed); retrying…', true);
     setTimeout(connect, 1000);
   };
   socket.onmessage = (event) => {

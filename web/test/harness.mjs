@@ -49,10 +49,11 @@ export function chromiumOrSkip() {
 }
 
 // A fresh browser with one page; `errors` collects the page's uncaught exceptions.
-export async function openBrowser(chromium, viewport) {
+// extraArgs: more Chromium switches (e.g. --host-resolver-rules).
+export async function openBrowser(chromium, viewport, extraArgs = []) {
   const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'dynahand-chromium-'));
   const context = await chromium.launchPersistentContext(profile, {
-    executablePath: CHROMIUM, headless: true, args: CHROMIUM_ARGS, viewport,
+    executablePath: CHROMIUM, headless: true, args: [...CHROMIUM_ARGS, ...extraArgs], viewport,
   });
   const page = context.pages()[0] || (await context.newPage());
   const errors = [];

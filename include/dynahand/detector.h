@@ -6,7 +6,9 @@
 /// (models/detector/, docs/detector.md for the model card and training).
 ///
 /// The crop is defined here once, for training data and inference alike:
-///  - centre: the segmented points' centroid c (camera frame, m), projected to pixel (cu, cv);
+///  - centre c (camera frame, m), projected to pixel (cu, cv): on the hand, the centre of its
+///    keypoints' bounding box (keypointBoxCentre) as the tracker last saw it; with nothing
+///    known yet, the segmented points' centroid;
 ///  - a square window of kCropSizeM metres at depth c.z, i.e. half-width r = fx * kCropSizeM /
 ///    (2 c.z) pixels, sampled kCropPixels x kCropPixels (nearest pixel);
 ///  - value per crop pixel: (z - c.z) / (kCropSizeM / 2) clamped to [-1, 1] where the pixel is
@@ -55,6 +57,10 @@ struct HandCrop {
   CropFrame frame;
   std::vector<float> pixels;  ///< (kCropPixels * kCropPixels)
 };
+
+/// The centre of the keypoints' bounding box (m, camera frame): where a crop centred on the
+/// hand is centred.
+Vec3 keypointBoxCentre(const std::array<Vec3, kKeypointCount>& points);
 
 /// Fills `out` from a processed cloud frame (its mask, depth and segment centroid). `centre`
 /// overrides the centroid (m, camera frame) when given. False when nothing is segmented.

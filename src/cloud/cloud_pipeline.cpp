@@ -371,9 +371,13 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
         coarseGrower.reject();
         continue;
       }
-      if (borderSeed < 0 && atBorder(coarse, r)) {
-        borderSeed = seed;
-        borderDepth = r.nearestPoint.z();
+      // Every volume at the border is passed over (a table or wall reaching the border nearer
+      // than the hand, below an arm that does too); the nearest of them is kept.
+      if (atBorder(coarse, r)) {
+        if (borderSeed < 0) {
+          borderSeed = seed;
+          borderDepth = r.nearestPoint.z();
+        }
         coarseGrower.reject();
         continue;
       }

@@ -1,5 +1,5 @@
 // The detector's crop (the definition is in dynahand/detector.h): nearest-pixel resampling of
-// the segmented depth around the hand's centroid, depth-normalised.
+// the segmented depth around a centre on the hand, depth-normalised.
 #include <algorithm>
 #include <cmath>
 
@@ -21,6 +21,15 @@ Vec3 CropFrame::toCrop(const Intrinsics& k, const Vec3& p) const {
   float u = (pu - centreU) / halfPixels;
   if (mirrored) u = -u;
   return {u, (pv - centreV) / halfPixels, (p.z() - centreZ) / (kCropSizeM * 0.5f)};
+}
+
+Vec3 keypointBoxCentre(const std::array<Vec3, kKeypointCount>& points) {
+  Vec3 lo = points[0], hi = points[0];
+  for (const Vec3& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return 0.5f * (lo + hi);
 }
 
 bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3* centre) {

@@ -23,6 +23,12 @@ namespace {
 constexpr float kForearmPerLength = 1.4f;  // as the synthesiser: elbow beyond the image
 // Cosine of the least angle between the forearm (toward the elbow) and the line of sight.
 constexpr float kArmTowardCameraCos = 0.9f;
+// Share of crops centred on the hand (its keypoint box centre, off by kCentreNoiseM per axis,
+// at most kCentreNoiseLimitM), as the tracker centres them once it has seen the hand; the rest
+// are centred on the segment centroid, as on a first frame.
+constexpr float kHandCentredShare = 0.75f;
+constexpr float kCentreNoiseM = 0.012f;
+constexpr float kCentreNoiseLimitM = 0.035f;
 constexpr float kReferenceWidth = 0.085f;  // SurfaceRadii are for this palm width
 constexpr std::uint32_t kFormatVersion = 1;
 constexpr char kMagic[4] = {'D', 'H', 'K', 'D'};
@@ -304,7 +310,11 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
     }
   if (all == 0 || static_cast<float>(mine) < 0.7f * static_cast<float>(all)) return false;
   if ((pc.cloud.segment.centroid - target).norm() > 0.12f) return false;
-  if (!makeCrop(pc.cloud, false, w.crop)) return false;
+  Vec3 centre = keypointBoxCentre(hand.keypoints);
+  const bool handCentred = chance(rng, kHandCentredShare);
+  for (int axis = 0; axis < 3; ++axis)
+    centre[axis] += std::clamp(normal(rng, kCentreNoiseM), -kCentreNoiseLimitM, kCentreNoiseLimitM);
+  if (!makeCrop(pc.cloud, false, w.crop, handCentred ? &centre : nullptr)) return false;
   for (std::size_t i = 0; i < out.uvd.size(); ++i) {
     out.uvd[i] = w.crop.frame.toCrop(k, hand.keypoints[i]);
     if (out.uvd[i].head<2>().cwiseAbs().maxCoeff() > 1.3f) return false;

@@ -18,6 +18,11 @@ constexpr int kMinPoints = 20;  // fewer sample points: no hand in view
 constexpr float kDetectorLabelCap = 8.0f;
 constexpr std::size_t kMinFitKeypoints = 8;   // fewer confident keypoints: no fitted pose
 constexpr float kOffHandTipPenaltyM = 0.05f;  // acquisition: per fingertip over background
+// A frame that starts within this mean distance (m) of the detector's keypoints fits them from
+// its own joint angles, in at most kWarmFitIterations: it is in the right basin already, and
+// a fit from scratch costs ~10x more. Farther (a flipped or lost hand) the fit starts afresh.
+constexpr float kWarmFitDistanceM = 0.03f;
+constexpr int kWarmFitIterations = 8;
 
 // The hand's own world (acquisition steps it); the simulations' copies take the tracking
 // sweeps (HandTracker's constructor).
@@ -160,11 +165,16 @@ float HandTracker::medianDistanceToPoints(std::span<const Vec3> keypoints,
   return std::sqrt(*middle);
 }
 
-bool HandTracker::fitDetectorPose() {
+bool HandTracker::fitDetectorPose(const model::JointAngles* warmStart) {
   if (keypoints_ == nullptr) return false;
   if (!detectorPoseTried_) {
     detectorPoseTried_ = true;
-    Result<model::FitResult> fit = fitter_.fit(fitIndices_, fitTargets_);
+    model::FitOptions options;
+    if (warmStart != nullptr) {
+      options.initial = warmStart;
+      options.maxIterations = kWarmFitIterations;
+    }
+    Result<model::FitResult> fit = fitter_.fit(fitIndices_, fitTargets_, options);
     if (fit) {
       model::forwardKinematicsInto(*model_, fit->angles, detectorPose_);
       haveDetectorPose_ = true;
@@ -356,9 +366,12 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   // The detector's simulations run only when the frame starts away from its keypoints: where
   // the two agree, the detector's ~1-2 cm of noise has nothing to add to the fit.
   bool engageDetector = false;
+  bool warmFit = false;
   if (keypoints_ != nullptr) {
     scratchKeypoints_ = model::keypoints21(*model_, pose_);
-    engageDetector = detectorDistance(scratchKeypoints_) > settings_.detector.engageDistanceM;
+    const float distance = detectorDistance(scratchKeypoints_);
+    engageDetector = distance > settings_.detector.engageDistanceM;
+    warmFit = distance < kWarmFitDistanceM;
   }
   const int forearm = rig_.anatomy().forearm;
   const Pose forearmPose = world.pose(forearm);
@@ -385,8 +398,13 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   // detector's) share that step's rows too.
   simulator_.prepareFrameStartRows(rig_, laneInput);
   // Fitted here, not in a lane: lanes may run on other threads.
+  // The keypoints bound as labelled points (the feature simulation) only when the frame starts
+  // far from them: nearer, pulling bones onto the detector's noisy joints made the result
+  // worse than the fitted start alone (whole animbank, desk and head-mounted).
+  const bool bindLabels = engageDetector && !warmFit;
   const model::ModelPose* fittedStart =
-      engageDetector && fitDetectorPose() ? &detectorPose_ : nullptr;
+      engageDetector && fitDetectorPose(warmFit ? &startAngles_ : nullptr) ? &detectorPose_
+                                                                           : nullptr;
   auto contextOf = [&](Lane& lane) {
     return StrategyContext{lane.rig,
                            lane.simulator,
@@ -396,8 +414,8 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
                            settings_.flipPeriodS,
                            frame.detection,
                            &startAngles_,
-                           engageDetector ? std::span<const LabelledPoint>(detectorLabels_)
-                                          : std::span<const LabelledPoint>(),
+                           bindLabels ? std::span<const LabelledPoint>(detectorLabels_)
+                                      : std::span<const LabelledPoint>(),
                            fittedStart};
   };
   auto startLane = [&](Lane& lane) {

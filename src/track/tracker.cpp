@@ -13,6 +13,20 @@
 
 namespace dynahand::track {
 
+namespace {
+
+// A crop centre this near (m) to one of the hand's points is on the hand.
+constexpr float kCropOnPointsM = 0.05f;
+
+bool liesOnPoints(const Vec3& p, const std::vector<Vec3>& points, float distanceM) {
+  const float limit = distanceM * distanceM;
+  for (const Vec3& q : points)
+    if ((q - p).squaredNorm() <= limit) return true;
+  return false;
+}
+
+}  // namespace
+
 const char* strategyName(StrategyKind kind) {
   switch (kind) {
     case StrategyKind::Normal:
@@ -192,10 +206,27 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
         centre = cluster.present ? &clusterCentre : nullptr;
       }
       detect::DetectedKeypoints& k = m.keypoints[h];
+      // The crop is centred on the hand where last frame's detection found it, while that
+      // still lies on this hand's points: the network then sees the whole hand centred, as in
+      // most of its training crops. Otherwise it looks from the centroid first, then again
+      // centred on what it found there.
+      Vec3 handCentre = k.valid ? detect::keypointBoxCentre(k.points) : Vec3::Zero();
+      const bool onHand = k.valid && liesOnPoints(handCentre, m.handPoints[h], kCropOnPointsM);
+      const bool mirrored = h == 1;
       k.valid = false;
-      if ((handCount == 1 || centre != nullptr) &&
-          detect::makeCrop(m.cloud, h == 1, m.crop, centre))
+      if (onHand) {
+        if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre))
+          k = m.keypointDetector->detect(m.crop, m.intrinsics);
+      } else if ((handCount == 1 || centre != nullptr) &&
+                 detect::makeCrop(m.cloud, mirrored, m.crop, centre)) {
         k = m.keypointDetector->detect(m.crop, m.intrinsics);
+        handCentre = detect::keypointBoxCentre(k.points);
+        if (k.valid && detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre)) {
+          const detect::DetectedKeypoints& centred =
+              m.keypointDetector->detect(m.crop, m.intrinsics);
+          if (centred.valid) k = centred;
+        }
+      }
       in.keypoints = k.valid ? &k : nullptr;
     }
     in.points = m.handPoints[h];

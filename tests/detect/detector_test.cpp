@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -66,17 +67,23 @@ TEST(KeypointDetector, RunsOnACropIntoTheCameraFrame) {
   ASSERT_TRUE(detector) << detector.message();
   DataOptions o;
   o.seed = 11;
-  const DataSample s = makeSample(o, 0);
-  const Intrinsics k = synth::sensorProfiles()[static_cast<std::size_t>(s.profile)].intrinsics;
-  const DetectedKeypoints& d = (*detector)->detect(HandCrop{s.frame, s.pixels}, k);
-  ASSERT_TRUE(d.valid);
+  // A few samples: any single one may be a hard view (a fist from the knuckles).
+  constexpr int kSamples = 8;
   double sum = 0.0;
-  for (std::size_t i = 0; i < d.points.size(); ++i) {
-    sum += static_cast<double>((d.points[i] - s.keypoints[i]).norm());
-    EXPECT_GE(d.confidence[i], 0.0f);
-    EXPECT_LE(d.confidence[i], 1.0f);
+  for (int index = 0; index < kSamples; ++index) {
+    const DataSample s = makeSample(o, index);
+    const Intrinsics k = synth::sensorProfiles()[static_cast<std::size_t>(s.profile)].intrinsics;
+    const DetectedKeypoints& d = (*detector)->detect(HandCrop{s.frame, s.pixels}, k);
+    ASSERT_TRUE(d.valid);
+    for (std::size_t i = 0; i < d.points.size(); ++i) {
+      sum += static_cast<double>((d.points[i] - s.keypoints[i]).norm());
+      EXPECT_GE(d.confidence[i], 0.0f);
+      EXPECT_LE(d.confidence[i], 1.0f);
+    }
   }
-  EXPECT_LT(sum / 21.0, 0.06);  // m: a hand, not noise
+  const double mean = sum / (21.0 * kSamples);
+  std::printf("mean keypoint error over %d samples: %.1f mm\n", kSamples, 1000.0 * mean);
+  EXPECT_LT(mean, 0.04);  // m: hands, not noise
 }
 
 }  // namespace

@@ -1,0 +1,57 @@
+"""open_sequence on a `dynahand synth` folder: frame count, camera, ground truth."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+import dynahand
+from conftest import FRAMES
+
+
+def test_synth_folder(clip):
+    seq = dynahand.open_sequence(clip)
+    assert len(seq) == FRAMES and seq.format == "canonical" and seq.has_ground_truth
+    camera = json.loads((clip / "camera.json").read_text())
+    assert seq.camera.width == camera["width"] and seq.camera.height == camera["height"]
+    assert seq.camera.fx == np.float32(camera["fx"]) and seq.camera.cy == np.float32(camera["cy"])
+    assert seq.depth_scale == np.float32(camera["depth_scale"]) and seq.fps == 30.0
+    lines = (clip / "groundtruth.jsonl").read_text().splitlines()
+    assert len(lines) == FRAMES
+    count = 0
+    for i, (depth, scale, truth) in enumerate(seq):
+        assert depth.dtype == np.uint16 and depth.shape == (camera["height"], camera["width"])
+        assert scale == seq.depth_scale
+        want = np.array(json.loads(lines[i])["keypoints21"], dtype=np.float64).astype(np.float32)
+        assert truth.dtype == np.float32 and np.array_equal(truth, want)
+        count += 1
+    assert count == FRAMES
+    assert np.array_equal(seq[-1][0], seq[FRAMES - 1][0])
+    assert np.array_equal(seq.ground_truth_array()[5], seq.ground_truth(5))
+    info = seq.info
+    assert info["frames"] == FRAMES and info["format"] == "canonical"
+    assert dynahand.Tracker(info, detector=False).camera == seq.camera
+
+
+def test_folder_without_ground_truth(clip, tmp_path):
+    copy = tmp_path / "nogt"
+    shutil.copytree(clip, copy)
+    (copy / "groundtruth.jsonl").unlink()
+    seq = dynahand.open_sequence(str(copy))
+    assert len(seq) == FRAMES and not seq.has_ground_truth
+    assert seq[0][2] is None and seq.ground_truth(3) is None
+    assert np.isnan(seq.ground_truth_array()).all()
+
+
+def test_depth_array_owns_its_buffer(clip):
+    seq = dynahand.open_sequence(clip)
+    depth = seq[0][0]
+    del seq  # the array keeps the frame alive (no copy out)
+    assert depth.base is not None and int(depth.max()) > 0
+
+
+def test_index_out_of_range(clip):
+    seq = dynahand.open_sequence(clip)
+    with pytest.raises(IndexError, match="out of range"):
+        seq[FRAMES]

@@ -10,6 +10,7 @@ packages=(
   libopencv-dnn-dev               # the learned detector's inference (ONNX through OpenCV DNN)
   python3-numpy python3-torch python3-onnx  # the detector's training script (train/), Debian's /usr/bin/python3
   pybind11-dev python3-dev python3-pytest   # `import dynahand` (python/) and its tests
+  python3-dask python3-distributed          # `dynahand batch` (python/dynahand_batch.py): Dask tasks
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # scripts/test.sh checks the sources' formatting

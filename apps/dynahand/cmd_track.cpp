@@ -251,8 +251,11 @@ int runTrack(const TrackOptions& o) {
     progress.update(done, extra);
   }
   progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
-  if (writer) (void)writer->close();
-  if (csv) (void)csv->close();
+  for (io::TrackWriter* w : {writer.get(), csv.get()}) {
+    if (w == nullptr) continue;
+    const Status s = w->close();
+    if (!s) throw std::runtime_error(s.message());
+  }
   if (bvh) {
     const Status s = bvh->save(o.bvh);
     if (!s) throw std::runtime_error(s.message());

@@ -41,7 +41,9 @@ std::string trackResultToJson(const track::TrackResult& result,
                               const model::ArticulatedModel& model,
                               const JsonOptions& options = {});
 
-// Streams frames to a file as they come, so an interrupted run keeps what it wrote.
+// Streams frames as they come to PATH.part and renames it to PATH on close(): a run that is
+// interrupted and closes keeps what it wrote under PATH; one that dies leaves only PATH.part,
+// never a partial file under the final name.
 class TrackWriter {
  public:
   enum class Format { JsonLines, Csv, IntelPose };
@@ -52,12 +54,14 @@ class TrackWriter {
                                                      const model::ArticulatedModel& model,
                                                      const JsonOptions& options = {});
   Status write(const track::TrackResult& result);
-  Status close();
+  Status close();  // flushes, closes and renames PATH.part to PATH (once; later calls: Ok)
   Format format() const { return format_; }
 
  private:
   TrackWriter() = default;
   std::filesystem::path path_;
+  std::filesystem::path partPath_;  // written until close()
+  bool closed_ = false;
   const model::ArticulatedModel* model_ = nullptr;
   JsonOptions options_;
   Format format_ = Format::JsonLines;

@@ -182,8 +182,10 @@ Result<std::unique_ptr<TrackWriter>> TrackWriter::create(const std::filesystem::
     std::error_code ec;
     std::filesystem::create_directories(path.parent_path(), ec);
   }
-  w->out_.open(path, std::ios::out | std::ios::trunc);
-  if (!w->out_) return Error{path.string() + ": cannot write"};
+  w->partPath_ = path;
+  w->partPath_ += ".part";
+  w->out_.open(w->partPath_, std::ios::out | std::ios::trunc);
+  if (!w->out_) return Error{w->partPath_.string() + ": cannot write"};
   if (w->format_ == Format::Csv) {
     w->out_ << "frame,time_ms,side,tracked,error_m,simulation";
     const auto& names = model::keypoint21Names();
@@ -224,13 +226,19 @@ Status TrackWriter::write(const track::TrackResult& r) {
     }
   }
   out_.flush();  // an interrupted run keeps every frame written so far
-  if (!out_) return Error{path_.string() + ": write failed"};
+  if (!out_) return Error{partPath_.string() + ": write failed"};
   return Ok{};
 }
 
 Status TrackWriter::close() {
+  if (closed_) return Ok{};
+  closed_ = true;
   out_.close();
-  if (out_.fail()) return Error{path_.string() + ": could not be closed"};
+  if (out_.fail()) return Error{partPath_.string() + ": could not be written in full"};
+  std::error_code ec;
+  std::filesystem::rename(partPath_, path_, ec);
+  if (ec)
+    return Error{partPath_.string() + ": cannot rename to " + path_.string() + ": " + ec.message()};
   return Ok{};
 }
 

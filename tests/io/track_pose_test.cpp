@@ -1,6 +1,7 @@
 // .pose output of TrackWriter and reading the JSON lines back (readTrackJsonl).
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 
 #include "dynahand/model_intel.h"
@@ -42,6 +43,27 @@ void expectSamePose(const model::ModelPose& a, const model::ModelPose& b, float 
     EXPECT_LT((a.bodies[i].p - b.bodies[i].p).norm(), tolerance) << "body " << i;
     EXPECT_GT(std::abs(a.bodies[i].q.dot(b.bodies[i].q)), 1.0f - tolerance) << "body " << i;
   }
+}
+
+// Until close() the frames go to PATH.part: a run that dies never leaves a partial file
+// under the final name.
+TEST(TrackWriter, WritesToAPartFileRenamedOnClose) {
+  const auto hand = model::makeDefaultHand();
+  const auto path = test::scratchDir("track_part") / "poses.jsonl";
+  auto part = path;
+  part += ".part";
+  auto writer = TrackWriter::create(path, hand);
+  ASSERT_TRUE(writer) << writer.message();
+  ASSERT_TRUE((*writer)->write(resultAt(hand, 0, true)));
+  EXPECT_TRUE(std::filesystem::exists(part));
+  EXPECT_FALSE(std::filesystem::exists(path));
+  ASSERT_TRUE((*writer)->close());
+  EXPECT_FALSE(std::filesystem::exists(part));
+  ASSERT_TRUE(std::filesystem::exists(path));
+  EXPECT_TRUE((*writer)->close());  // once only
+  const auto back = readTrackJsonl(path, hand);
+  ASSERT_TRUE(back) << back.message();
+  EXPECT_EQ(back->size(), 1u);
 }
 
 TEST(TrackWriter, PoseExtensionWritesOneLinePerFrameThatReadsBack) {

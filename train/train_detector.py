@@ -147,7 +147,7 @@ def main():
     p.add_argument("--work", default=None, help="data cache folder (default: OUT/../work or /tmp)")
     p.add_argument("--train-count", type=int, default=100000)
     p.add_argument("--heldback-count", type=int, default=3000)
-    p.add_argument("--epochs", type=float, default=16.0)
+    p.add_argument("--epochs", type=float, default=28.0)
     p.add_argument("--batch", type=int, default=128)
     p.add_argument("--lr", type=float, default=2e-3)
     p.add_argument("--seed", type=int, default=1)

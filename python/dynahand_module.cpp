@@ -594,32 +594,6 @@ eval::KeypointMetrics evaluate(const py::handle& gt, const py::handle& pred, dou
   return std::move(*m);
 }
 
-// The lines `dynahand eval` prints (without the report paths).
-std::string metricsSummary(const eval::KeypointMetrics& m) {
-  std::string s;
-  char line[256];
-  std::snprintf(line, sizeof line, "frames %d (hand visible %d, evaluated %d)\n", m.frames,
-                m.visibleFrames, m.evaluatedFrames);
-  s += line;
-  std::snprintf(line, sizeof line,
-                "21-keypoint error  mean %.2f mm  median %.2f mm  p95 %.2f mm  max %.2f mm\n",
-                m.meanMm, m.medianMm, m.p95Mm, m.maxMm);
-  s += line;
-  s += "success (max joint error <=)";
-  for (std::size_t t = 0; t < m.successThresholdsMm.size(); ++t) {
-    std::snprintf(line, sizeof line, "  %.0f mm: %.1f%%", m.successThresholdsMm[t],
-                  100.0 * m.successFraction[t]);
-    s += line;
-  }
-  std::snprintf(line, sizeof line,
-                "\njitter %.2f mm  lost frames %d in %d episodes  recovery mean %.2f s max %.2f "
-                "s\n",
-                m.jitterMm, m.lostFrames, m.lostEpisodes, m.meanRecoverySeconds,
-                m.maxRecoverySeconds);
-  s += line;
-  return s;
-}
-
 template <class T>
 py::array_t<double> doubles(const T& values) {
   py::array_t<double> a(static_cast<py::ssize_t>(values.size()));
@@ -962,7 +936,7 @@ PYBIND11_MODULE(dynahand, m) {
           "per_frame_max_mm",
           [](const eval::KeypointMetrics& k) { return doubles(k.perFrameMaxMm); },
           "(N,) largest joint error per frame, mm (NaN where not evaluated).")
-      .def("summary", &metricsSummary, "The lines `dynahand eval` prints.")
+      .def("summary", &eval::summaryText, "The lines `dynahand eval` prints.")
       .def("report_markdown", &eval::markdownReport, py::arg("title") = "Evaluation",
            "The Markdown report `dynahand eval --out` writes (report.md).")
       .def("__repr__", [](const eval::KeypointMetrics& k) {

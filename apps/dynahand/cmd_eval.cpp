@@ -39,17 +39,7 @@ int runEval(const EvalOptions& o) {
   auto m = eval::computeKeypointMetrics(s, options);
   if (!m) throw std::runtime_error(m.message());
 
-  std::printf("frames %d (hand visible %d, evaluated %d)\n", m->frames, m->visibleFrames,
-              m->evaluatedFrames);
-  std::printf("21-keypoint error  mean %.2f mm  median %.2f mm  p95 %.2f mm  max %.2f mm\n",
-              m->meanMm, m->medianMm, m->p95Mm, m->maxMm);
-  std::printf("success (max joint error <=)");
-  for (std::size_t t = 0; t < m->successThresholdsMm.size(); ++t) {
-    std::printf("  %.0f mm: %.1f%%", m->successThresholdsMm[t], 100.0 * m->successFraction[t]);
-  }
-  std::printf("\njitter %.2f mm  lost frames %d in %d episodes  recovery mean %.2f s max %.2f s\n",
-              m->jitterMm, m->lostFrames, m->lostEpisodes, m->meanRecoverySeconds,
-              m->maxRecoverySeconds);
+  std::fputs(eval::summaryText(*m).c_str(), stdout);
   if (!o.out.empty()) {
     const std::filesystem::path dir(o.out);
     std::error_code ec;

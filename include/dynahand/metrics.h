@@ -61,6 +61,10 @@ double percentile(std::vector<double> values, double q);
 Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& sequence,
                                                const MetricsOptions& options = {});
 
+// The summary `dynahand eval` prints: frames, error statistics, success fractions, jitter,
+// losses and recovery, one item group per line (each line ends with a newline).
+std::string summaryText(const KeypointMetrics& metrics);
+
 // A Markdown report: summary table, success curve table, per-joint table.
 std::string markdownReport(const KeypointMetrics& metrics, const std::string& title);
 

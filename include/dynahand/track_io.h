@@ -61,7 +61,6 @@ class TrackWriter {
   TrackWriter() = default;
   std::filesystem::path path_;
   std::filesystem::path partPath_;  // written until close()
-  bool closed_ = false;
   const model::ArticulatedModel* model_ = nullptr;
   JsonOptions options_;
   Format format_ = Format::JsonLines;

@@ -9,6 +9,22 @@
 
 namespace dynahand::eval {
 
+std::string summaryText(const KeypointMetrics& m) {
+  std::string s = fmt::format("frames {} (hand visible {}, evaluated {})\n", m.frames,
+                              m.visibleFrames, m.evaluatedFrames);
+  s += fmt::format(
+      "21-keypoint error  mean {:.2f} mm  median {:.2f} mm  p95 {:.2f} mm  max {:.2f} mm\n",
+      m.meanMm, m.medianMm, m.p95Mm, m.maxMm);
+  s += "success (max joint error <=)";
+  for (std::size_t t = 0; t < m.successThresholdsMm.size(); ++t)
+    s +=
+        fmt::format("  {:.0f} mm: {:.1f}%", m.successThresholdsMm[t], 100.0 * m.successFraction[t]);
+  s += fmt::format(
+      "\njitter {:.2f} mm  lost frames {} in {} episodes  recovery mean {:.2f} s max {:.2f} s\n",
+      m.jitterMm, m.lostFrames, m.lostEpisodes, m.meanRecoverySeconds, m.maxRecoverySeconds);
+  return s;
+}
+
 std::string markdownReport(const KeypointMetrics& m, const std::string& title) {
   std::string out = fmt::format("# {}\n\n", title);
   out += "| metric | value |\n| --- | --- |\n";

@@ -231,8 +231,7 @@ Status TrackWriter::write(const track::TrackResult& r) {
 }
 
 Status TrackWriter::close() {
-  if (closed_) return Ok{};
-  closed_ = true;
+  if (!out_.is_open()) return Ok{};  // closed (and renamed) already
   out_.close();
   if (out_.fail()) return Error{partPath_.string() + ": could not be written in full"};
   std::error_code ec;

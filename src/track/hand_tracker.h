@@ -70,9 +70,8 @@ class HandTracker {
   // confident keypoints; none below the confidence settings.
   void prepareDetectorEvidence(const HandFrame& frame);
   // The model fitted to the detector's confident keypoints (detectorPose_), once per frame
-  // and only when a strategy or acquisition asks; false without one.
-  // The model fitted to the detector's keypoints (once per frame): from warmStart when given
-  // (a few iterations), else from scratch (a rigid start, then every joint; about 3 ms).
+  // and only when a strategy or acquisition asks; false without one. From warmStart when
+  // given (a few iterations), else from scratch (a rigid start, then every joint; about 3 ms).
   bool fitDetectorPose(const model::JointAngles* warmStart = nullptr);
   // Mean distance (m) of `keypoints` from the detector's confident ones.
   float detectorDistance(const Keypoints21& keypoints) const;

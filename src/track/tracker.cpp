@@ -220,11 +220,13 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       } else if ((handCount == 1 || centre != nullptr) &&
                  detect::makeCrop(m.cloud, mirrored, m.crop, centre)) {
         k = m.keypointDetector->detect(m.crop, m.intrinsics);
-        handCentre = detect::keypointBoxCentre(k.points);
-        if (k.valid && detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre)) {
-          const detect::DetectedKeypoints& centred =
-              m.keypointDetector->detect(m.crop, m.intrinsics);
-          if (centred.valid) k = centred;
+        if (k.valid) {
+          handCentre = detect::keypointBoxCentre(k.points);
+          if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre)) {
+            const detect::DetectedKeypoints& centred =
+                m.keypointDetector->detect(m.crop, m.intrinsics);
+            if (centred.valid) k = centred;
+          }
         }
       }
       in.keypoints = k.valid ? &k : nullptr;

@@ -134,6 +134,11 @@ TEST(Report, MarkdownAndSvgContainTheNumbers) {
   EXPECT_NE(svg.find("<polyline"), std::string::npos);
   EXPECT_NE(svg.find("</svg>"), std::string::npos);
   EXPECT_NE(svgSuccessCurve(*m, "clip").find("<polyline"), std::string::npos);
+  const std::string text = summaryText(*m);
+  EXPECT_EQ(text.rfind("frames 5 (hand visible 5, evaluated 5)\n", 0), 0u);
+  EXPECT_NE(text.find("21-keypoint error  mean 3.00 mm  median 3.00 mm"), std::string::npos);
+  EXPECT_NE(text.find("  10 mm: 100.0%"), std::string::npos);
+  EXPECT_EQ(text.back(), '\n');
 }
 
 }  // namespace

@@ -1,10 +1,11 @@
-"""Type stub of the dynahand extension module (python/dynahand_module.cpp; docs/python.md).
+"""Type stub of the dynahand extension module (python/module.cpp and python/bind_*.cpp;
+docs/python.md).
 
 Metres, camera frame as OpenCV (x right, y down, z forward); keypoints in MediaPipe order.
 """
 
 import os
-from typing import Iterator, Optional, Sequence as _Seq, Tuple, Union
+from typing import Iterable, Iterator, Optional, Sequence as _Seq, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -17,6 +18,9 @@ _Path = Union[str, "os.PathLike[str]"]
 _CameraLike = Union["Camera", dict, "Sequence", "SyntheticClip"]
 _Frame = Tuple[_U16, float, Optional[_F32]]
 _KeypointsLike = Union[npt.ArrayLike, _Seq[Optional[npt.ArrayLike]]]
+# Frames a hand size is estimated from: a Sequence, a SyntheticClip, an (N, H, W) uint16 array,
+# or an iterable of (H, W) uint16 arrays or (depth, depth_scale, ...) tuples.
+_FramesLike = Union["Sequence", "SyntheticClip", _U16, Iterable[Union[_U16, tuple]]]
 
 class Camera:
     """Pinhole depth camera intrinsics (pixels)."""
@@ -85,6 +89,26 @@ class HandResult:
     @property
     def disagreeing_frames(self) -> int: ...
 
+class HandSize:
+    """A hand size estimated from depth frames (estimate_hand_size, Tracker(hand_size="auto")).
+    Made by those only; pass it to Tracker as hand_size."""
+
+    @property
+    def length(self) -> float:
+        """Wrist crease to middle fingertip, m."""
+    @property
+    def width(self) -> float:
+        """Palm width across the knuckles, m."""
+    @property
+    def fit_score(self) -> float:
+        """The best candidate's fit in [0, 1] (about 0.98-0.99 on clean synthetic data)."""
+    @property
+    def frames_used(self) -> int: ...
+    @property
+    def candidates(self) -> int:
+        """Candidate models tracked (13; 7 with a length or width given)."""
+    def to_dict(self) -> dict: ...
+
 class Tracker:
     """Tracks one or two hands in depth frames, as `dynahand track` does."""
 
@@ -93,13 +117,20 @@ class Tracker:
         self,
         camera: _CameraLike,
         hands: int = 1,
-        hand_size: Optional[Tuple[float, float]] = None,
+        hand_size: Union[None, Tuple[float, float], str, HandSize] = None,
         detector: Union[bool, _Path] = True,
         threads: int = 1,
         per_frame: bool = False,
         fps: Optional[float] = None,
         model_file: Optional[_Path] = None,
-    ) -> None: ...
+        frames: Optional[_FramesLike] = None,
+        hand_size_frames: int = 30,
+    ) -> None:
+        """hand_size: None (0.19, 0.085), (length, width) in m, a HandSize
+        (estimate_hand_size()), or "auto": estimated as `dynahand track --hand-size auto` from
+        the first hand_size_frames (10..600) frames of `frames` (default: camera, when it is a
+        Sequence or SyntheticClip) before anything is tracked; track() then starts at frame 0.
+        ValueError for "auto" without frames, frames without "auto", or too few frames."""
     def track(
         self, depth: _U16, depth_scale: float = 0.001, timestamp: Optional[float] = None
     ) -> list[HandResult]:
@@ -119,11 +150,34 @@ class Tracker:
     @property
     def hand_size(self) -> Optional[Tuple[float, float]]: ...
     @property
+    def hand_size_estimate(self) -> Optional[HandSize]:
+        """The HandSize the hand was built from ("auto" or a HandSize); else None."""
+    @property
     def detector(self) -> bool: ...
     @property
     def detector_weights(self) -> str: ...
     @property
     def body_names(self) -> list[str]: ...
+
+def estimate_hand_size(
+    frames: _FramesLike,
+    camera: Optional[_CameraLike] = None,
+    start_keypoints: Optional[npt.ArrayLike] = None,
+    frames_used: int = 30,
+    threads: int = 1,
+    length: Optional[float] = None,
+    width: Optional[float] = None,
+    hands: int = 1,
+    per_frame: bool = False,
+    depth_scale: float = 0.001,
+    fps: Optional[float] = None,
+) -> HandSize:
+    """The built-in hand's size from the first frames_used (10..600) frames, as
+    `dynahand track --hand-size auto` estimates it. camera defaults to the frames' own;
+    start_keypoints as --init gt; a given length or width is kept. Frame i is at i / fps s;
+    bare arrays at depth_scale. Reads no further than frames_used items. ValueError for bad
+    arguments or too few frames (more than 6 without start_keypoints), OSError for a frame
+    that cannot be read."""
 
 class SequenceIterator:
     def __iter__(self) -> SequenceIterator: ...
@@ -235,3 +289,20 @@ def evaluate(
     gt: _KeypointsLike, pred: _KeypointsLike, fps: float = 30.0, lost_mm: float = 50.0
 ) -> Metrics:
     """Accuracy of pred against gt, as `dynahand eval`."""
+
+class _DetectorData(TypedDict):  # a plain dict at run time
+    pixels: npt.NDArray[np.uint8]  # (N, 64, 64): x in [-1, 1] is pixels / 127.5 - 1
+    uvd: _F32  # (N, 21, 3): keypoints in normalised crop coordinates
+    profile: npt.NDArray[np.int32]  # (N,): sensor profile index
+    source: npt.NDArray[np.int32]  # (N,): 0 random pose, 1 clip pose, 2 perturbed clip pose
+
+def detector_data(
+    split: str = "train",
+    count: int = 1000,
+    seed: int = 1,
+    threads: int = 1,
+    proportion_spread: float = 0.15,
+) -> _DetectorData:
+    """The detector's synthetic training samples, value for value those
+    `dynahand detector data --split S --count N --seed SEED` writes (split: "train" or
+    "held-back"; the same for any threads)."""

@@ -103,11 +103,52 @@ def build_detector():
     return Detector()
 
 
-def generate(dynahand, split, count, seed, path, threads):
+def import_dynahand(exe, module_dir=None):
+    """The dynahand Python module that makes the data in memory, or None (the command makes
+    it): the one in --python-module-dir (which must hold it), else in the python/ folder of the
+    command's build tree (build/release/apps/dynahand: build/release/python), else importable."""
+    import importlib
+    import shutil
+    build = os.path.dirname(os.path.dirname(os.path.realpath(shutil.which(exe) or exe)))
+    folder = module_dir or os.path.join(build, "python")
+    sys.path.insert(0, folder)
+    try:
+        module = importlib.import_module("dynahand")
+    except ImportError:
+        module = None
+    finally:
+        sys.path.remove(folder)
+    usable = module is not None and hasattr(module, "detector_data")
+    if module_dir and not (usable and os.path.dirname(os.path.realpath(module.__file__))
+                           == os.path.realpath(module_dir)):
+        sys.exit(f"train_detector: --python-module-dir {module_dir}: no dynahand module with "
+                 "detector_data there")
+    if not usable:
+        print(f"detector data: {exe} detector data (no dynahand Python module)", flush=True)
+        return None
+    print(f"detector data: dynahand.detector_data ({module.__file__})", flush=True)
+    return module
+
+
+def generate(dynahand, split, count, seed, path, threads, module=None):
+    """The data file (docs/formats/detector-data.md) at path unless it is there: made by
+    dynahand.detector_data (module) or the command, the same bytes either way."""
     if os.path.exists(path):
         return
-    subprocess.run([dynahand, "detector", "data", "--split", split, "--count", str(count),
-                    "--seed", str(seed), "--threads", str(threads), "-o", path], check=True)
+    if module is None:
+        subprocess.run([dynahand, "detector", "data", "--split", split, "--count", str(count),
+                        "--seed", str(seed), "--threads", str(threads), "-o", path], check=True)
+        return
+    data = module.detector_data(split=split, count=count, seed=seed, threads=threads)
+    records = np.empty(count, [("pixels", "u1", (CROP * CROP,)), ("uvd", "<f4", (KEYPOINTS * 3,)),
+                               ("meta", "<i4", (2,))])
+    records["pixels"] = data["pixels"].reshape(count, -1)
+    records["uvd"] = data["uvd"].reshape(count, -1)
+    records["meta"] = np.stack([data["profile"], data["source"]], axis=1)
+    with open(path + ".partial", "wb") as f:  # renamed when complete, as the command does
+        f.write(b"DHKD" + np.array([1, count, CROP, KEYPOINTS], dtype="<u4").tobytes())
+        records.tofile(f)
+    os.replace(path + ".partial", path)
 
 
 def to_input(pixels, rng=None):
@@ -143,6 +184,9 @@ def evaluate(model, pixels, uvd, batch=512):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--dynahand", required=True, help="the dynahand command (generates the data)")
+    p.add_argument("--python-module-dir", default=None,
+                   help="folder of the dynahand Python module that makes the data in memory "
+                        "(default: the python/ folder of --dynahand's build tree, else import)")
     p.add_argument("--out", required=True, help="output folder for detector.onnx and detector.json")
     p.add_argument("--work", default=None, help="data cache folder (default: OUT/../work or /tmp)")
     p.add_argument("--train-count", type=int, default=100000)
@@ -172,8 +216,9 @@ def main():
     train_path = os.path.join(work, f"train_{a.train_count}_s{a.seed}.bin")
     held_path = os.path.join(work, f"heldback_{a.heldback_count}_s{a.seed + 1000}.bin")
     t0 = time.time()
-    generate(a.dynahand, "train", a.train_count, a.seed, train_path, a.threads)
-    generate(a.dynahand, "held-back", a.heldback_count, a.seed + 1000, held_path, a.threads)
+    module = import_dynahand(a.dynahand, a.python_module_dir)
+    generate(a.dynahand, "train", a.train_count, a.seed, train_path, a.threads, module)
+    generate(a.dynahand, "held-back", a.heldback_count, a.seed + 1000, held_path, a.threads, module)
     data_s = time.time() - t0
     pixels, uvd = read_data(train_path)
     held_pixels, held_uvd = read_data(held_path)

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,16 @@ struct DetectorFigures {
   double msPerCrop = 0.0;  ///< network time per crop, ms (one thread)
 };
 DetectorFigures evaluateDetector(KeypointDetector& detector, const DataOptions& options);
+
+/// A sample's crop pixel (in [-1, 1]) as the data file stores it: one byte, round((p + 1) 127.5).
+std::uint8_t dataPixelByte(float pixel);
+
+/// Makes samples 0 .. options.count - 1 in blocks, each block in parallel on options.threads
+/// workers (each reusing its renderers and hand models), and hands every block to
+/// `block(first, samples)` in order: samples[i] is sample first + i. Stops with the error of a
+/// bad option, or as soon as `block` returns false (then returns Ok).
+Status forEachSampleBlock(const DataOptions& options,
+                          const std::function<bool(int, std::span<const DataSample>)>& block);
 
 /// Writes `options.count` samples to `file` (format: docs/formats/detector-data.md).
 /// progress(done, total) after each block of samples when given.

@@ -382,6 +382,35 @@ DetectorFigures evaluateDetector(KeypointDetector& detector, const DataOptions& 
   return f;
 }
 
+std::uint8_t dataPixelByte(float pixel) {
+  return static_cast<std::uint8_t>(std::lround((pixel + 1.0f) * 127.5f));
+}
+
+Status forEachSampleBlock(const DataOptions& options,
+                          const std::function<bool(int, std::span<const DataSample>)>& block) {
+  if (options.count < 1) return Error{"detector data: count must be at least 1"};
+  if (options.threads < 1 || options.threads > 64)
+    return Error{"detector data: threads must be 1..64"};
+  constexpr int kBlock = 64;
+  std::vector<Worker> workers(static_cast<std::size_t>(options.threads));
+  std::vector<DataSample> samples(kBlock);
+  for (int first = 0; first < options.count; first += kBlock) {
+    const int n = std::min(kBlock, options.count - first);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < options.threads; ++t) {
+      threads.emplace_back([&, t] {
+        for (int i = t; i < n; i += options.threads)
+          samples[static_cast<std::size_t>(i)] =
+              makeSampleWith(workers[static_cast<std::size_t>(t)], options, first + i);
+      });
+    }
+    for (std::thread& th : threads) th.join();
+    if (!block(first, std::span<const DataSample>(samples.data(), static_cast<std::size_t>(n))))
+      break;
+  }
+  return Ok{};
+}
+
 Status writeDataFile(const DataOptions& options, const std::filesystem::path& file,
                      const std::function<void(int, int)>& progress) {
   if (options.count < 1) return Error{"detector data: count must be at least 1"};
@@ -395,37 +424,24 @@ Status writeDataFile(const DataOptions& options, const std::filesystem::path& fi
                                    static_cast<std::uint32_t>(kKeypointCount)};
   out.write(kMagic, 4);
   out.write(reinterpret_cast<const char*>(header), sizeof(header));
-  // Blocks of samples made in parallel, written in order.
-  constexpr int kBlock = 64;
-  std::vector<Worker> workers(static_cast<std::size_t>(options.threads));
-  std::vector<DataSample> block(kBlock);
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(kCropPixels * kCropPixels));
-  for (int start = 0; start < options.count; start += kBlock) {
-    const int n = std::min(kBlock, options.count - start);
-    std::vector<std::thread> threads;
-    for (int t = 0; t < options.threads; ++t) {
-      threads.emplace_back([&, t] {
-        for (int i = t; i < n; i += options.threads)
-          block[static_cast<std::size_t>(i)] =
-              makeSampleWith(workers[static_cast<std::size_t>(t)], options, start + i);
+  const Status made =
+      forEachSampleBlock(options, [&](int first, std::span<const DataSample> block) {
+        for (const DataSample& s : block) {
+          for (std::size_t p = 0; p < bytes.size(); ++p) bytes[p] = dataPixelByte(s.pixels[p]);
+          out.write(reinterpret_cast<const char*>(bytes.data()),
+                    static_cast<std::streamsize>(bytes.size()));
+          std::array<float, 3 * kKeypointCount> uvd{};
+          for (std::size_t j = 0; j < s.uvd.size(); ++j)
+            for (int a = 0; a < 3; ++a) uvd[3 * j + static_cast<std::size_t>(a)] = s.uvd[j][a];
+          out.write(reinterpret_cast<const char*>(uvd.data()), sizeof(uvd));
+          const std::int32_t meta[2] = {s.profile, s.source};
+          out.write(reinterpret_cast<const char*>(meta), sizeof(meta));
+        }
+        if (progress) progress(first + static_cast<int>(block.size()), options.count);
+        return true;
       });
-    }
-    for (std::thread& th : threads) th.join();
-    for (int i = 0; i < n; ++i) {
-      const DataSample& s = block[static_cast<std::size_t>(i)];
-      for (std::size_t p = 0; p < bytes.size(); ++p)
-        bytes[p] = static_cast<std::uint8_t>(std::lround((s.pixels[p] + 1.0f) * 127.5f));
-      out.write(reinterpret_cast<const char*>(bytes.data()),
-                static_cast<std::streamsize>(bytes.size()));
-      std::array<float, 3 * kKeypointCount> uvd{};
-      for (std::size_t j = 0; j < s.uvd.size(); ++j)
-        for (int a = 0; a < 3; ++a) uvd[3 * j + static_cast<std::size_t>(a)] = s.uvd[j][a];
-      out.write(reinterpret_cast<const char*>(uvd.data()), sizeof(uvd));
-      const std::int32_t meta[2] = {s.profile, s.source};
-      out.write(reinterpret_cast<const char*>(meta), sizeof(meta));
-    }
-    if (progress) progress(start + n, options.count);
-  }
+  if (!made) return made;
   out.close();
   if (!out) return Error{partial.string() + ": write failed"};
   std::error_code ec;

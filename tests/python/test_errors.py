@@ -59,7 +59,7 @@ def test_tracker_options(tmp_path):
         dynahand.Tracker(CAMERA, hands=3)
     with pytest.raises(ValueError, match="length must be"):
         dynahand.Tracker(CAMERA, hand_size=(0.5, 0.08))
-    with pytest.raises(ValueError, match="not offered"):
+    with pytest.raises(ValueError, match="needs the frames"):  # more: test_hand_size.py
         dynahand.Tracker(CAMERA, hand_size="auto")
     with pytest.raises(ValueError, match="hand_size must be"):
         dynahand.Tracker(CAMERA, hand_size=(0.19,))

@@ -1,16 +1,12 @@
 // libFuzzer target: every reader of untrusted sensor files (PNG depth, NYU PNG,
 // camera.json, the authors' NAME.json + NAME.rs, groundtruth.jsonl) must return a
 // value or an Error, never crash, hang or read out of bounds. Input layout: fuzz_input.h.
-#include <unistd.h>
-
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <string>
-#include <string_view>
 
 #include "dynahand/sequence.h"
 #include "fuzz_input.h"
+#include "fuzz_util.h"
 #include "sensor/camera_json.h"
 #include "sensor/png_depth.h"
 
@@ -18,26 +14,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using dynahand::fuzz::FuzzMode;
-
-std::string_view text(std::span<const std::uint8_t> bytes) {
-  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
-}
-
-void writeFile(const fs::path& file, std::span<const std::uint8_t> bytes) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
-
-// A scratch folder per fuzzing process, reused by every input.
-const fs::path& scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("dynahand-fuzz-" + std::to_string(::getpid()));
-    fs::create_directories(d / "seq" / "depth");
-    return d;
-  }();
-  return dir;
-}
+using dynahand::fuzz::scratch;
+using dynahand::fuzz::text;
+using dynahand::fuzz::writeFile;
 
 // Reads every frame the way a caller would, checking the reader's own promises.
 void readAll(const dynahand::SequenceReader& reader) {
@@ -80,7 +59,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       (void)dynahand::sensor::parseGroundTruthLine(text(in.whole), "groundtruth.jsonl line 1");
       break;
     case FuzzMode::CanonicalFolder: {
-      const fs::path seq = scratch() / "seq";
+      static const fs::path seq = [] {
+        fs::create_directories(scratch() / "seq" / "depth");
+        return scratch() / "seq";
+      }();
       writeFile(seq / "camera.json", in.a);
       writeFile(seq / "depth" / "000000.png", in.b);
       if (auto reader = dynahand::SequenceReader::open(seq)) readAll(*reader);

@@ -1,6 +1,7 @@
 // dynahand bench: the motion suite and the standard accuracy and speed suite
 // (include/dynahand/bench_suite.h), printed as tables and written as Markdown
-// (docs/benchmarks.md by default for `--suite all`).
+// (docs/benchmarks.md by default for `--suite all`); and the soak (soak.h): track or serve
+// for a given time, resident memory and frame time at the start and the end.
 #include <sys/utsname.h>
 
 #include <chrono>
@@ -16,6 +17,7 @@
 #include "dynahand/bench_suite.h"
 #include "dynahand/command.h"
 #include "dynahand/progress.h"
+#include "soak.h"
 
 namespace dynahand::cli {
 namespace {
@@ -28,6 +30,10 @@ struct BenchOptions {
   int threads = 1, frames = 0;
   bool quick = false;
   bool noDetector = false;  // every item without the learned detector (an ablation)
+  // --suite soak
+  double minutes = 0.0;   // default: 60 (track), 15 (--serve)
+  std::string soakInput;  // default: soak.h's
+  bool serve = false, paced = false;
 };
 
 // ../shared/data beside the working folder, else beside the source tree this was built from.
@@ -146,7 +152,50 @@ std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const B
   return items;
 }
 
+// --suite soak: one soak run, its table, and the Markdown when --markdown is given.
+int runSoakBench(const BenchOptions& o, const std::string& commandLine) {
+  soak::SoakOptions options;
+  options.seconds = 60.0 * (o.minutes > 0.0 ? o.minutes : o.serve ? 15.0 : 60.0);
+  options.input = o.soakInput;
+  if (o.frames > 0) options.clipFrames = o.frames;
+  options.serve = o.serve;
+  options.paced = o.paced;
+  options.detector = !o.noDetector;
+  options.stop = [] { return interrupted(); };
+  const std::string machine = machineLine();
+  installInterruptHandler();
+  Result<soak::SoakReport> report = soak::runSoak(options);
+  if (!report) {
+    if (report.message().rfind("--soak-input", 0) == 0) throw UsageError(report.message());
+    throw std::runtime_error(report.message());
+  }
+  std::printf("\n%s", soak::soakText(*report).c_str());
+  if (!o.markdown.empty()) {
+    std::ostringstream md;
+    md << "# Soak benchmark\n\n"
+       << "- Command: `" << commandLine << "`\n"
+       << "- Machine: " << machine << " (at the start)\n\n"
+       << soak::soakMarkdown(*report);
+    const std::filesystem::path path(o.markdown);
+    if (path.has_parent_path()) {
+      std::error_code ec;
+      std::filesystem::create_directories(path.parent_path(), ec);
+    }
+    std::ofstream out(path);
+    out << md.str();
+    if (!out) throw std::runtime_error(o.markdown + ": cannot write");
+    std::printf("wrote %s\n", o.markdown.c_str());
+  }
+  if (interrupted()) return 130;
+  return report->pass() ? kExitOk : kExitFailure;
+}
+
 int runBench(const BenchOptions& o, const std::string& commandLine) {
+  const bool soakOptions = o.minutes > 0.0 || !o.soakInput.empty() || o.serve || o.paced;
+  if (o.suite != "soak" && soakOptions)
+    throw UsageError("--minutes, --soak-input, --serve and --paced go with --suite soak");
+  if (o.paced && !o.serve) throw UsageError("--paced goes with --serve");
+  if (o.suite == "soak") return runSoakBench(o, commandLine);
   const bool motion = o.suite != "standard", standard = o.suite != "motion";
   const std::string machineBefore = machineLine();
   installInterruptHandler();
@@ -213,15 +262,18 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
 }
 
 const CommandRegistration kBenchCommand{Command{
-    "bench", "run the motion and standard accuracy and speed suites, write docs/benchmarks.md",
+    "bench",
+    "run the motion and standard accuracy and speed suites (docs/benchmarks.md), or a soak",
     [](CLI::App& sub) -> std::function<int()> {
       auto o = std::make_shared<BenchOptions>();
       sub.add_option("--suite", o->suite,
                      "motion (the headline: animbank segments and clips at 2.5x, desk and head "
                      "cameras, varied hand proportions), standard (regression rows and "
-                     "ablations) or all (both; writes docs/benchmarks.md)")
+                     "ablations), all (both; writes docs/benchmarks.md), or soak (track, or "
+                     "--serve, for --minutes; resident memory and frame time at the start and "
+                     "the end)")
           ->capture_default_str()
-          ->check(CLI::IsMember({"motion", "standard", "all"}));
+          ->check(CLI::IsMember({"motion", "standard", "all", "soak"}));
       sub.add_option("--data", o->data,
                      "folder with intel/animbank.pose (default ../shared/data from the working "
                      "folder or the source tree; absent: the animbank rows are skipped)");
@@ -229,7 +281,8 @@ const CommandRegistration kBenchCommand{Command{
                    "a few short items (CI): 2 clips, 1-2 profiles, 8 frames; 2 animbank "
                    "segments and the first cut");
       sub.add_option("--frames", o->frames,
-                     "frames per clip item (default: standard 150, motion 90; quick 8)")
+                     "frames per clip item (default: standard 150, motion 90; quick 8; soak: "
+                     "frames per synthetic clip, 300)")
           ->check(CLI::Range(2, 100000));
       sub.add_option("--threads", o->threads,
                      "items run in parallel (each item on one thread: per-frame times stay "
@@ -237,6 +290,19 @@ const CommandRegistration kBenchCommand{Command{
           ->check(CLI::Range(1, 64));
       sub.add_flag("--no-detector", o->noDetector,
                    "every item without the learned detector (the paper's simulations only)");
+      sub.add_option("--minutes", o->minutes,
+                     "soak: how long (default 60; 15 with --serve; fractions allowed)")
+          ->check(CLI::Range(0.01, 10000.0));
+      sub.add_option("--soak-input", o->soakInput,
+                     "soak: synth:CLIP[,CLIP...] (rendered on the fly at tof, played in turn; "
+                     "default synth:wave,open-close,pinch) or a recording, looped; with --serve "
+                     "one input as dynahand serve takes it (default synth:wave)");
+      sub.add_flag("--serve", o->serve,
+                   "soak: through dynahand serve's session and server with one WebSocket client "
+                   "reading every message");
+      sub.add_flag("--paced", o->paced,
+                   "soak --serve: at the input's frame rate (default: as fast as it goes, as "
+                   "serve --fast)");
       sub.add_option("--markdown", o->markdown,
                      "Markdown report ('' to skip; default docs/benchmarks.md for --suite all, "
                      "none for one suite)")
@@ -247,7 +313,9 @@ const CommandRegistration kBenchCommand{Command{
           "  dynahand bench --suite motion --threads 2       # the motion suite, table only\n"
           "  dynahand bench --suite motion --data ../shared/data --markdown /tmp/motion.md\n"
           "  dynahand bench --suite motion --threads 2 --no-detector   # without the detector\n"
-          "  dynahand bench --quick --markdown /tmp/bench.md");
+          "  dynahand bench --quick --markdown /tmp/bench.md\n"
+          "  dynahand bench --suite soak --minutes 60 --markdown /tmp/soak-track.md\n"
+          "  dynahand bench --suite soak --serve --minutes 15 --markdown /tmp/soak-serve.md");
       return [o] {
         std::string line = "dynahand bench";
         if (o->suite != "all") line += " --suite " + o->suite;
@@ -255,6 +323,10 @@ const CommandRegistration kBenchCommand{Command{
         if (o->frames > 0) line += " --frames " + std::to_string(o->frames);
         if (o->threads > 1) line += " --threads " + std::to_string(o->threads);
         if (o->noDetector) line += " --no-detector";
+        if (o->minutes > 0.0) line += fmt::format(" --minutes {}", o->minutes);
+        if (!o->soakInput.empty()) line += " --soak-input " + o->soakInput;
+        if (o->serve) line += " --serve";
+        if (o->paced) line += " --paced";
         return runBench(*o, line);
       };
     }}};

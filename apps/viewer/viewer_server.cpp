@@ -1,5 +1,7 @@
 #include "viewer_server.h"
 
+#include "viewer_client_input.h"
+
 #define ASIO_STANDALONE
 #include <nlohmann/json.hpp>
 #include <websocketpp/config/asio_no_tls.hpp>
@@ -15,7 +17,6 @@
 #include <random>
 #include <set>
 #include <sstream>
-#include <string_view>
 #include <thread>
 #include <utility>
 
@@ -37,18 +38,6 @@ const char* contentType(const std::filesystem::path& file) {
   return "application/octet-stream";
 }
 
-// Only plain relative names below the web root: letters, digits, '-', '_', '.', '/' and
-// no "..", so a request can never leave the folder.
-bool safeResource(const std::string& path) {
-  if (path.empty() || path.size() > 200 || path.find("..") != std::string::npos) return false;
-  for (const char c : path) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '-' || c == '_' || c == '.' || c == '/';
-    if (!ok) return false;
-  }
-  return path.front() != '/';
-}
-
 const char* kPageUnavailable =
     "<!doctype html><title>dynahand viewer</title><h1>Viewer page unavailable</h1>"
     "<p>This build has no viewer page: web/node_modules was missing when it was built. Run "
@@ -65,21 +54,6 @@ std::string randomToken() {
     for (int shift = 28; shift >= 0; shift -= 4) token += kHex[(bits >> shift) & 0xFu];
   }
   return token;
-}
-
-// The value of "token" in a request target's query ("/?token=..."); empty when absent.
-std::string queryToken(const std::string& resource) {
-  const std::size_t query = resource.find('?');
-  if (query == std::string::npos) return {};
-  const std::string_view all(resource);
-  for (std::size_t begin = query + 1; begin <= all.size();) {
-    std::size_t end = all.find('&', begin);
-    if (end == std::string_view::npos) end = all.size();
-    const std::string_view item = all.substr(begin, end - begin);
-    if (item.substr(0, 6) == "token=") return std::string(item.substr(6));
-    begin = end + 1;
-  }
-  return {};
 }
 
 // Compares every character whatever the first difference, so the time taken does not tell
@@ -165,30 +139,13 @@ struct ViewerServer::Impl {
       reject(h, "only text (JSON) messages are accepted", true);
       return;
     }
-    const nlohmann::json j = nlohmann::json::parse(msg->get_payload(), nullptr, false);
-    if (j.is_discarded() || !j.is_object()) {
-      reject(h, "malformed message: expected a JSON object", true);
-      return;
-    }
-    const auto type = j.find("type");
-    const auto action = j.find("action");
-    if (type == j.end() || *type != "control" || action == j.end() || !action->is_string()) {
-      reject(h, "unknown message: expected {\"type\":\"control\",\"action\":...}", false);
-      return;
-    }
-    ClientCommand command;
-    if (*action == "pause") {
-      command = ClientCommand::Pause;
-    } else if (*action == "resume") {
-      command = ClientCommand::Resume;
-    } else if (*action == "step") {
-      command = ClientCommand::Step;
-    } else {
-      reject(h, "unknown action: expected pause, resume or step", false);
+    const ClientMessage m = parseClientMessage(msg->get_payload());
+    if (!m.ok) {
+      reject(h, m.refusal, m.close);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex);
-    commands.push_back(command);
+    commands.push_back(m.command);
   }
 
   // Before a WebSocket upgrade is answered: the page's own origin or this run's token, else

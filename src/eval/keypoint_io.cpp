@@ -1,5 +1,6 @@
 #include "dynahand/keypoint_io.h"
 
+#include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -9,7 +10,10 @@ namespace {
 
 using nlohmann::json;
 
-constexpr int kMaxFrames = 10'000'000;  // guards against absurd frame numbers
+// Guards against absurd frame numbers (a million: over nine hours at 30 frames per second).
+// Frames are indexed, so a frame number costs memory: 256 bytes a frame, 256 MB at this limit
+// (10 million let a one-line file take 2.5 GB).
+constexpr int kMaxFrames = 1'000'000;
 
 Result<Keypoints21> parseKeypoints(const json& value) {
   if (!value.is_array() || value.size() != 21)
@@ -48,13 +52,15 @@ Result<KeypointSequence> readKeypointsJsonl(const std::filesystem::path& path,
     const std::string where = path.string() + ":" + std::to_string(lineNumber) + ": ";
     json obj = json::parse(line, nullptr, /*allow_exceptions=*/false);
     if (obj.is_discarded() || !obj.is_object()) return Error{where + "not a JSON object"};
-    int frame = nextFrame;
+    std::int64_t frame = nextFrame;
     if (obj.contains("frame")) {
       if (!obj["frame"].is_number_integer()) return Error{where + "\"frame\" must be an integer"};
-      frame = obj["frame"].get<int>();
+      // As a 64-bit number (get<int> wrapped 4294967296 to frame 0); an unsigned one past
+      // the int64 range comes out negative.
+      frame = obj["frame"].get<std::int64_t>();
     }
     if (frame < 0 || frame >= kMaxFrames) return Error{where + "frame number out of range"};
-    nextFrame = frame + 1;
+    nextFrame = static_cast<int>(frame) + 1;
     std::optional<Keypoints21> keypoints;
     if (obj.contains("hands")) {
       if (!obj["hands"].is_array()) return Error{where + "\"hands\" must be an array"};

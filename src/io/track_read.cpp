@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <unordered_map>
@@ -17,7 +18,9 @@ using nlohmann::json;
 
 Vec3 readVec(const json& j) {
   if (!j.is_array() || j.size() != 3) throw std::runtime_error("expected [x, y, z]");
-  return {j[0].get<float>(), j[1].get<float>(), j[2].get<float>()};
+  const Vec3 v(j[0].get<float>(), j[1].get<float>(), j[2].get<float>());
+  if (!v.allFinite()) throw std::runtime_error("expected [x, y, z] of finite numbers");
+  return v;
 }
 Quat readQuat(const json& j) {
   if (!j.is_array() || j.size() != 4) throw std::runtime_error("expected [w, x, y, z]");
@@ -27,6 +30,28 @@ Quat readQuat(const json& j) {
 }
 float readNumber(const json& j) {
   return j.is_number() ? j.get<float>() : std::numeric_limits<float>::quiet_NaN();
+}
+// A whole number that fits an int (get<int> of a float or a larger number would not).
+int readInt(const json& j, const char* what) {
+  constexpr int kMin = std::numeric_limits<int>::min(), kMax = std::numeric_limits<int>::max();
+  bool fits = false;
+  if (j.is_number_unsigned()) {
+    fits = j.get<std::uint64_t>() <= static_cast<std::uint64_t>(kMax);
+  } else if (j.is_number_integer()) {
+    fits = j.get<std::int64_t>() >= kMin && j.get<std::int64_t>() <= kMax;
+  }
+  if (!fits) throw std::runtime_error(fmt::format("{}: {} is not a whole number", what, j.dump()));
+  return j.get<int>();
+}
+// A hand size the default hand can be built at: finite, and within half and twice the sizes
+// the commands accept (length 0.10-0.30 m, width 0.05-0.13 m).
+float readHandDimension(const json& j, const char* what, float lo, float hi) {
+  const float v = readNumber(j);
+  if (!(v >= lo && v <= hi)) {
+    throw std::runtime_error(
+        fmt::format("hand_size.{}: {} is not in [{}, {}] m", what, j.dump(), lo, hi));
+  }
+  return v;
 }
 
 TrackedHand readHand(const json& h, const model::ArticulatedModel& model,
@@ -96,14 +121,15 @@ Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& pa
     try {
       const json j = json::parse(line);
       TrackedFrame frame;
-      frame.frame = j.at("frame").get<int>();
+      frame.frame = readInt(j.at("frame"), "frame");
       frame.timeMs = j.value("time_ms", 0.0);
       if (j.contains("hand_size")) {
         const json& size = j["hand_size"];
         HandSizeRecord record;
-        record.dimensions = {readNumber(size.at("length")), readNumber(size.at("width"))};
+        record.dimensions = {readHandDimension(size.at("length"), "length", 0.05f, 0.6f),
+                             readHandDimension(size.at("width"), "width", 0.025f, 0.26f)};
         record.estimated = size.value("source", std::string("given")) == "estimated";
-        record.frames = size.value("frames", 0);
+        if (size.contains("frames")) record.frames = readInt(size["frames"], "hand_size.frames");
         if (size.contains("fit")) record.fitScore = readNumber(size["fit"]);
         frame.handSize = record;
       }

@@ -104,7 +104,10 @@ bool computeOpenXrFrames(const ArticulatedModel& model, std::array<BodyFrame, 26
     const Keypoint& kp = model.keypoints()[static_cast<size_t>(at)];
     const Pose& bodyPose = rest.bodies[static_cast<size_t>(kp.body)];
     const Vec3 boneWorld = world[static_cast<size_t>(to)] - world[static_cast<size_t>(from)];
-    if (boneWorld.norm() < 1e-6f) return false;
+    // A bone of no length, or one too long for float arithmetic (keypoints near the float
+    // limit), has no direction.
+    const float length = boneWorld.norm();
+    if (!(length >= 1e-6f) || !std::isfinite(length)) return false;
     const Vec3 z = -(bodyPose.q.conjugate() * boneWorld).normalized();
     // +y out of the back of the hand: the body's y axis (dorsal by the model convention),
     // made perpendicular to the bone.

@@ -125,6 +125,12 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
         return pathError(path + ".density", "must be a positive number (kg/m^3)");
       }
       mass = density * shape->volume();
+      if (!std::isfinite(mass) || mass <= 0.0f) {
+        return pathError(path + ".density",
+                         fmt::format("gives a mass of {} kg (hull volume {} m^3); the mass must "
+                                     "be a positive finite number",
+                                     mass, shape->volume()));
+      }
     }
     model.bodies_.push_back(Body{b.name, b.vertices, std::move(shape).value(), mass, -1, -1});
   }

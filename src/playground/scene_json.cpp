@@ -42,10 +42,24 @@ void readNumber(const Json& object, const std::string& path, const char* key, fl
     out = mustBePositive ? positive(*v, childPath(path, key)) : number(*v, childPath(path, key));
 }
 
+// Object dimensions, m: far outside this range a hull degenerates in float arithmetic (and
+// the physics is meaningless long before).
+constexpr float kMinLength = 0.001f;
+constexpr float kMaxLength = 100.0f;
+constexpr const char* kLengthRange = "[0.001, 100] m";
+
 Vec3 positiveVec3(const Json& v, const std::string& path) {
   const Vec3 x = vec3(v, path);
   if (!(x.minCoeff() > 0.0f)) throw FormatError{path, "every component must be > 0"};
+  if (!(x.minCoeff() >= kMinLength && x.maxCoeff() <= kMaxLength))
+    throw FormatError{path, std::string("every component must be in ") + kLengthRange};
   return x;
+}
+
+void readLength(const Json& object, const std::string& path, const char* key, float& out) {
+  readNumber(object, path, key, out, true);
+  if (!(out >= kMinLength && out <= kMaxLength))
+    throw FormatError{childPath(path, key), std::string("must be in ") + kLengthRange};
 }
 
 ObjectKind kindFromName(const std::string& name, const std::string& path) {
@@ -93,10 +107,10 @@ ObjectSpec readObject(const Json& j, const std::string& path) {
     o.orientation = rotationFromDegrees(vec3(*v, childPath(path, "rotationDeg")));
   readNumber(j, path, "mass", o.mass, true);
   if (const Json* v = optional(j, "size")) o.size = positiveVec3(*v, childPath(path, "size"));
-  readNumber(j, path, "radius", o.radius, true);
-  readNumber(j, path, "length", o.length, true);
-  readNumber(j, path, "capRadius", o.capRadius, true);
-  readNumber(j, path, "capLength", o.capLength, true);
+  readLength(j, path, "radius", o.radius);
+  readLength(j, path, "length", o.length);
+  readLength(j, path, "capRadius", o.capRadius);
+  readLength(j, path, "capLength", o.capLength);
   if (const Json* v = optional(j, "points")) {
     const std::string p = childPath(path, "points");
     arrayAt(*v, p);
@@ -108,6 +122,8 @@ ObjectSpec readObject(const Json& j, const std::string& path) {
   if (const Json* v = optional(j, "axis")) {
     o.axis = vec3(*v, childPath(path, "axis"));
     if (!(o.axis.norm() > 1e-6f)) throw FormatError{childPath(path, "axis"), "zero vector"};
+    // Scaled first: normalize() alone made [3e38, 3e38, 3e38] zero (its norm overflows).
+    o.axis /= o.axis.cwiseAbs().maxCoeff();
     o.axis.normalize();
   }
   if (const Json* v = optional(j, "limitsDeg")) {
@@ -159,7 +175,12 @@ SceneSpec readScene(const Json& root) {
     if (const Json* v = optional(c, "yawDeg")) yaw = number(*v, "camera.yawDeg");
     s.camera = cameraLookingDown(position, pitch * kDeg, yaw * kDeg);
   }
-  if (const Json* v = optional(root, "stepHz")) s.stepDt = 1.0f / positive(*v, "stepHz");
+  if (const Json* v = optional(root, "stepHz")) {
+    // Each input frame runs round(dt * stepHz) steps: bounded, so a frame ends.
+    const float hz = number(*v, "stepHz");
+    if (!(hz >= 1.0f && hz <= 1000.0f)) throw FormatError{"stepHz", "must be in [1, 1000]"};
+    s.stepDt = 1.0f / hz;
+  }
   readNumber(root, "", "friction", s.friction);
   if (s.friction < 0.0f) throw FormatError{"friction", "must be >= 0"};
   if (const Json* v = optional(root, "hand")) {
@@ -221,7 +242,7 @@ Result<SceneSpec> parseScene(const std::string& jsonText, const std::string& sou
   Json root;
   try {
     root = Json::parse(jsonText);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // parse_error, or out_of_range for overflowing numbers
     return Error{sourceName + ": not valid JSON: " + e.what()};
   }
   try {

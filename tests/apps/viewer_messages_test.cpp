@@ -15,6 +15,7 @@
 
 #include "dynahand/synth.h"
 #include "dynahand/track_io.h"
+#include "viewer_client_input.h"
 #include "viewer_messages.h"
 #include "viewer_server.h"
 
@@ -306,6 +307,31 @@ TEST(ViewerServer, AnAcceptedClientIsCounted) {
   }
   EXPECT_TRUE(server->hasClients());
   ::close(fd);
+}
+
+// What clients send, parsed apart from the network (also fuzz/fuzz_viewer_messages.cpp).
+TEST(ViewerClientInput, CommandsAreAcceptedAndEverythingElseRefused) {
+  const ClientMessage step = parseClientMessage(R"({"type":"control","action":"step"})");
+  EXPECT_TRUE(step.ok);
+  EXPECT_EQ(step.command, ClientCommand::Step);
+  EXPECT_EQ(parseClientMessage(R"({"action":"resume","type":"control"})").command,
+            ClientCommand::Resume);
+  const ClientMessage malformed = parseClientMessage("{\"type\":");
+  EXPECT_FALSE(malformed.ok);
+  EXPECT_TRUE(malformed.close);
+  EXPECT_FALSE(parseClientMessage("[1]").ok);
+  for (const char* unknown : {R"({"type":"hello"})", R"({"type":"control","action":"rewind"})",
+                              R"({"type":"control","action":1})"}) {
+    const ClientMessage m = parseClientMessage(unknown);
+    EXPECT_FALSE(m.ok) << unknown;
+    EXPECT_FALSE(m.close) << unknown;
+    EXPECT_FALSE(m.refusal.empty()) << unknown;
+  }
+  EXPECT_EQ(queryToken("/?x=1&token=abc&y"), "abc");
+  EXPECT_EQ(queryToken("/token=abc"), "");
+  EXPECT_TRUE(safeResource("assets/viewer.js"));
+  for (const char* unsafe : {"", "/etc/passwd", "../x", "a/../../b", "a%2e%2e", "a\\b"})
+    EXPECT_FALSE(safeResource(unsafe)) << unsafe;
 }
 
 }  // namespace

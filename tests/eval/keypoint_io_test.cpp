@@ -71,5 +71,26 @@ TEST(KeypointIo, ErrorsNameFileAndLine) {
   ASSERT_FALSE(empty.ok());
 }
 
+// Found by fuzz/fuzz_track_jsonl.cpp: frame numbers up to 10 million were accepted, and
+// frames are indexed, so this one line made eval allocate 2.5 GB; a frame number past the
+// int range wrapped (4294967296 read as frame 0).
+TEST(KeypointIo, FrameNumbersAreBounded) {
+  auto huge =
+      readKeypointsJsonl(writeFile("huge.jsonl", "{\"frame\":9999999,\"keypoints21\":null}\n"));
+  ASSERT_FALSE(huge.ok());
+  EXPECT_NE(huge.message().find("huge.jsonl:1: frame number out of range"), std::string::npos)
+      << huge.message();
+  for (const char* frame : {"4294967296", "18446744073709551615", "-1"}) {
+    auto wide = readKeypointsJsonl(
+        writeFile("wide.jsonl", std::string("{\"frame\":") + frame + ",\"keypoints21\":null}\n"));
+    ASSERT_FALSE(wide.ok()) << frame;
+    EXPECT_NE(wide.message().find("frame number out of range"), std::string::npos) << frame;
+  }
+  auto last =
+      readKeypointsJsonl(writeFile("last.jsonl", "{\"frame\":999999,\"keypoints21\":null}\n"));
+  ASSERT_TRUE(last.ok()) << last.message();
+  EXPECT_EQ(last->frames.size(), 1'000'000u);
+}
+
 }  // namespace
 }  // namespace dynahand::eval

@@ -122,5 +122,54 @@ TEST(TrackWriter, RejectsUnknownExtension) {
   EXPECT_NE(w.message().find(".txt"), std::string::npos);
 }
 
+// Found by fuzz/fuzz_track_jsonl.cpp (what render and play read back): a float or too large
+// "frame" (or hand_size "frames") converted to int was undefined behaviour; a hand_size that is
+// no number, or far from a hand's, crashed render building the default hand at that size;
+// positions too large for a float came back infinite.
+TEST(TrackRead, BadNumbersAreErrorsNamingLineAndField) {
+  const auto hand = model::makeDefaultHand();
+  const auto dir = test::scratchDir("track_read_bad");
+  const std::string pose = R"({"name":"palm","p":[1e39,0,0.4],"q":[1,0,0,0]})";
+  struct Case {
+    std::string line, expected;
+  };
+  const Case cases[] = {
+      {R"({"frame":1e30,"hands":[]})", "frame: 1e+30 is not a whole number"},
+      {R"({"frame":2147483648,"hands":[]})", "frame: 2147483648 is not a whole number"},
+      {R"({"frame":0,"hand_size":{"length":0.19,"width":0.08,"frames":1e20},"hands":[]})",
+       "hand_size.frames: 1e+20 is not a whole number"},
+      {R"({"frame":0,"hand_size":{"length":"x","width":0.08},"hands":[]})",
+       "hand_size.length: \"x\" is not in [0.05, 0.6] m"},
+      {R"({"frame":0,"hand_size":{"length":0.19,"width":1e-30},"hands":[]})",
+       "hand_size.width: 1e-30 is not in [0.025, 0.26] m"},
+      {R"({"frame":0,"hands":[{"side":"right","tracked":false,"candidates":[{"simulation":"normal","error":0.1,"bodies":[)" +
+           [&] {
+             std::string bodies;
+             for (std::size_t b = 0; b < hand.bodies().size(); ++b) bodies += (b ? "," : "") + pose;
+             return bodies;
+           }() +
+           "]}]}]}",
+       "expected [x, y, z] of finite numbers"},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(dir / "bad.jsonl") << c.line << "\n";
+    const auto frames = readTrackJsonl(dir / "bad.jsonl", hand);
+    ASSERT_FALSE(frames.ok()) << c.line;
+    EXPECT_NE(frames.message().find("bad.jsonl:1: " + c.expected), std::string::npos)
+        << frames.message() << " / expected " << c.expected;
+  }
+  // What the writer writes still reads back, hand size included.
+  JsonOptions o;
+  o.handSize = HandSizeRecord{{0.17f, 0.078f}, true, 30, 0.99f};
+  std::ofstream(dir / "good.jsonl")
+      << trackResultToJson(sampleResult(hand, 5, true), hand, o) << "\n";
+  const auto good = readTrackJsonl(dir / "good.jsonl", hand);
+  ASSERT_TRUE(good.ok()) << good.message();
+  EXPECT_EQ(good->front().frame, 5);
+  ASSERT_TRUE(good->front().handSize.has_value());
+  EXPECT_EQ(good->front().handSize->frames, 30);
+  EXPECT_NEAR(good->front().handSize->dimensions.length, 0.17f, 1e-6f);
+}
+
 }  // namespace
 }  // namespace dynahand::io

@@ -274,6 +274,44 @@ TEST(ModelFormatErrors, BadMass) {
   EXPECT_EQ(loadError(doc), "test.json: bodies[1]: give mass or density, not both");
 }
 
+// Found by fuzz/fuzz_model_json.cpp: a density was only checked to be positive, so a large
+// density on a large hull gave an infinite mass and a tiny one on a small hull a zero mass;
+// the model loaded, but saved (with its mass) it no longer did.
+TEST(ModelFormatErrors, DensityGivingNoFiniteMass) {
+  const std::string cube = R"([[0,0,0],[S,0,0],[0,S,0],[0,0,S],[S,S,0],[S,0,S],[0,S,S],[S,S,S]])";
+  auto body = [&](const std::string& density, const std::string& size) {
+    std::string vertices = cube;
+    for (std::size_t at = vertices.find('S'); at != std::string::npos; at = vertices.find('S'))
+      vertices.replace(at, 1, size);
+    return R"({"format": "dynahand-model", "version": 1,
+               "metadata": {"name": "b", "handedness": "none", "units": "m"},
+               "bodies": [{"name": "b", "density": )" +
+           density + R"(, "vertices": )" + vertices + R"(}], "joints": []})";
+  };
+  for (const auto& [density, size] : {std::pair{"3e38", "10"}, std::pair{"1e-44", "0.001"}}) {
+    const Result<ArticulatedModel> model = parseModel(body(density, size), "test.json");
+    ASSERT_FALSE(model.ok()) << density;
+    EXPECT_EQ(model.message().rfind("test.json: bodies[0].density: gives a mass of ", 0), 0u)
+        << model.message();
+  }
+  EXPECT_TRUE(parseModel(body("1000", "0.01"), "test.json").ok());
+}
+
+// Found by fuzz/fuzz_model_json.cpp: a keypoint near the float limit gave a bone of infinite
+// length, and the OpenXR joint frames built along it were NaN. Such a model now has no
+// OpenXR joints (as one with a bone of no length), and its 21 keypoints still work.
+TEST(ModelFormat, KeypointNearTheFloatLimitLeavesNoNaNOpenXrFrames) {
+  json doc = json::parse(modelToJson(makeDefaultHand()));
+  for (json& k : doc["keypoints"]) {
+    if (k["name"] == "thumb_cmc") k["point"] = json::array({3e38, 3e38, 0});
+  }
+  const Result<ArticulatedModel> model = parseModel(doc.dump(), "test.json");
+  ASSERT_TRUE(model.ok()) << model.message();
+  EXPECT_TRUE(model->hasKeypoints21());
+  EXPECT_FALSE(model->hasOpenXrJoints());
+  EXPECT_TRUE(makeDefaultHand().hasOpenXrJoints());
+}
+
 TEST(ModelFormatErrors, WrongTypes) {
   json doc = armJson();
   doc["bodies"] = json::object();

@@ -118,6 +118,83 @@ TEST(SceneFile, ErrorsNameThePath) {
   }
 }
 
+// Found by fuzz/fuzz_scene.cpp: a number too large for a double (JSON allows any exponent)
+// made the JSON parser throw out_of_range, which parseScene did not catch (std::terminate).
+TEST(SceneFile, OverflowingNumberIsAnErrorNotACrash) {
+  const std::string found =
+      R"({"format": "dynahand-scene", "version": 1, "camera": {"position": [0, -0.217, -0.054],)"
+      R"( "pitchDeg": -75}, "objects": [{"name": "s", "kind": "swing", "size": [0.008, 0.08, 0.008],)"
+      R"( "links": 3, "position": [0.4, 0.3335, -0.9999999999E999000000000000999999]}]})";
+  for (const std::string& json :
+       {found, std::string(R"({"format": "dynahand-scene", "version": 1e999})")}) {
+    const auto scene = parseScene(json, "s.json");
+    ASSERT_FALSE(scene.ok()) << json;
+    EXPECT_EQ(scene.message().rfind("s.json: not valid JSON: ", 0), 0u) << scene.message();
+  }
+}
+
+// Found by fuzz/fuzz_scene.cpp: sizes far from an object's (1e-30 or 1e30 m) made a hull
+// that Qhull cannot build, and building the playground crashed; a huge stepHz made one input
+// frame run billions of physics steps (a hang).
+TEST(SceneFile, SizesAndStepRateOutsideTheirRangeAreErrors) {
+  const std::string head =
+      R"({"format": "dynahand-scene", "version": 1, "camera": {"position": [0, 0.4, 0.4], "pitchDeg": 35}, )";
+  struct Case {
+    std::string json, expected;
+  };
+  const Case cases[] = {
+      {head +
+           R"("objects": [{"name": "a", "kind": "sphere", "radius": 1e-30, "position": [0, 0, 0]}]})",
+       "objects[0].radius: must be in [0.001, 100] m"},
+      {head +
+           R"("objects": [{"name": "a", "kind": "box", "size": [1e-30, 1, 1], "position": [0, 0, 0]}]})",
+       "objects[0].size: every component must be in [0.001, 100] m"},
+      {head +
+           R"("objects": [{"name": "a", "kind": "box", "size": [1e30, 1e30, 1e30], "position": [0, 0, 0]}]})",
+       "objects[0].size: every component must be in [0.001, 100] m"},
+      {head +
+           R"("objects": [{"name": "a", "kind": "cylinder", "radius": 1e30, "length": 0.1, "position": [0, 0, 0]}]})",
+       "objects[0].radius: must be in [0.001, 100] m"},
+      {head +
+           R"("objects": [{"name": "a", "kind": "barbell", "capLength": 1e-9, "position": [0, 0, 0]}]})",
+       "objects[0].capLength: must be in [0.001, 100] m"},
+      {head + R"("stepHz": 1e7, "objects": []})", "stepHz: must be in [1, 1000]"},
+      {head + R"("stepHz": 0.001, "objects": []})", "stepHz: must be in [1, 1000]"},
+  };
+  for (const Case& c : cases) {
+    const auto scene = parseScene(c.json, "s.json");
+    ASSERT_FALSE(scene.ok()) << c.json;
+    EXPECT_NE(scene.message().find("s.json: " + c.expected), std::string::npos)
+        << scene.message() << " / expected " << c.expected;
+  }
+  // The ends of the ranges still build.
+  for (
+      const char* object :
+      {R"({"name": "a", "kind": "box", "size": [100, 0.001, 100], "position": [0, 0, 0]})",
+       R"({"name": "a", "kind": "sphere", "radius": 0.001, "position": [0, 0, 0]})",
+       R"({"name": "a", "kind": "cylinder", "radius": 100, "length": 0.001, "position": [0, 0, 0]})",
+       R"({"name": "a", "kind": "barbell", "radius": 0.001, "length": 100, "capRadius": 100, "capLength": 0.001, "position": [0, 0, 0]})",
+       R"({"name": "a", "kind": "dial", "radius": 100, "length": 0.001, "size": [100, 0.001, 100], "position": [0, 0, 0]})"}) {
+    const auto scene =
+        parseScene(head + R"("stepHz": 1000, "objects": [)" + object + "]}", "s.json");
+    ASSERT_TRUE(scene.ok()) << scene.message();
+    EXPECT_NE(build(*scene), nullptr) << object;
+  }
+}
+
+// Found by fuzz/fuzz_scene.cpp: a hinge axis whose length overflows a float came out of
+// normalize() as the zero vector.
+TEST(SceneFile, HugeHingeAxisIsNormalised) {
+  const auto scene = parseScene(
+      R"({"format": "dynahand-scene", "version": 1, "camera": {"position": [0, 0.4, 0.4], "pitchDeg": 35},
+          "objects": [{"name": "l", "kind": "lever", "position": [0, 0, 0], "axis": [3e38, 3e38, 3e38],
+                       "limitsDeg": [-10, 10]}]})",
+      "s.json");
+  ASSERT_TRUE(scene.ok()) << scene.message();
+  const Vec3 expected = Vec3::Ones().normalized();
+  EXPECT_NEAR((scene->objects[0].axis - expected).norm(), 0.0f, 1e-6f);
+}
+
 TEST(SceneFile, CameraLookingDownMapsCameraDownToSceneDown) {
   const float pitch = 35.0f * kDeg;
   const Pose camera = cameraLookingDown(Vec3(0, 0.4f, 0.4f), pitch);

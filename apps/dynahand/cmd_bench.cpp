@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/bench_suite.h"
 #include "dynahand/command.h"
 #include "dynahand/progress.h"
@@ -176,14 +177,8 @@ int runSoakBench(const BenchOptions& o, const std::string& commandLine) {
        << "- Command: `" << commandLine << "`\n"
        << "- Machine: " << machine << " (at the start)\n\n"
        << soak::soakMarkdown(*report);
-    const std::filesystem::path path(o.markdown);
-    if (path.has_parent_path()) {
-      std::error_code ec;
-      std::filesystem::create_directories(path.parent_path(), ec);
-    }
-    std::ofstream out(path);
-    out << md.str();
-    if (!out) throw std::runtime_error(o.markdown + ": cannot write");
+    const Status written = writeFileAtomically(o.markdown, md.str());  // whole or untouched
+    if (!written) throw std::runtime_error(written.message());
     std::printf("wrote %s\n", o.markdown.c_str());
   }
   if (interrupted()) return 130;
@@ -248,14 +243,8 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
       o.markdownGiven ? o.markdown : (o.suite == "all" ? "docs/benchmarks.md" : "");
   if (!markdown.empty()) {
     md << "\n" << body;
-    const std::filesystem::path path(markdown);
-    if (path.has_parent_path()) {
-      std::error_code ec;
-      std::filesystem::create_directories(path.parent_path(), ec);
-    }
-    std::ofstream out(path);
-    out << md.str();
-    if (!out) throw std::runtime_error(markdown + ": cannot write");
+    const Status written = writeFileAtomically(markdown, md.str());  // whole or untouched
+    if (!written) throw std::runtime_error(written.message());
     std::printf("wrote %s\n", markdown.c_str());
   }
   return interrupted() ? 130 : kExitOk;

@@ -1,6 +1,7 @@
 // dynahand detector: the learned keypoint detector's data and figures. `data` writes a
 // synthetic training or held-back set (docs/formats/detector-data.md) for train/; `eval`
 // measures a weights file on a freshly generated set (the model card's figures).
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -12,6 +13,14 @@
 
 namespace dynahand::cli {
 namespace {
+
+// A number for a JSON line: NaN and infinities (a network that outputs NaN) are null.
+std::string jsonNumber(double value, int decimals) {
+  if (!std::isfinite(value)) return "null";
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  return text;
+}
 
 detect::DataSplit parseSplit(const std::string& name) {
   if (name == "train") return detect::DataSplit::Train;
@@ -76,16 +85,17 @@ const CommandRegistration kDetectorCommand{Command{
         auto detector = detect::KeypointDetector::load(file);
         if (!detector) {
           std::fprintf(stderr, "dynahand detector eval: %s\n", detector.message().c_str());
-          return kExitFailure;
+          return detectorWeightsGiven(flags->weights) ? kExitUsage : kExitFailure;
         }
         const detect::DetectorFigures f = detect::evaluateDetector(**detector, flags->data);
         std::printf(
             "{\"weights\": \"%s\", \"split\": \"%s\", \"samples\": %d, \"seed\": %llu, "
-            "\"mean_mm\": %.2f, \"p95_mm\": %.2f, \"mean_confidence\": %.3f, \"ms_per_crop\": "
-            "%.3f}\n",
+            "\"mean_mm\": %s, \"p95_mm\": %s, \"mean_confidence\": %s, \"ms_per_crop\": "
+            "%s}\n",
             file.string().c_str(), flags->split.c_str(), f.samples,
-            static_cast<unsigned long long>(flags->data.seed), f.meanMm, f.p95Mm, f.meanConfidence,
-            f.msPerCrop);
+            static_cast<unsigned long long>(flags->data.seed), jsonNumber(f.meanMm, 2).c_str(),
+            jsonNumber(f.p95Mm, 2).c_str(), jsonNumber(f.meanConfidence, 3).c_str(),
+            jsonNumber(f.msPerCrop, 3).c_str());
         return kExitOk;
       };
     }}};

@@ -1,8 +1,11 @@
 // dynahand eval: accuracy of a tracked sequence against ground truth.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <string>
+#include <utility>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/command.h"
 #include "dynahand/keypoint_io.h"
 #include "dynahand/metrics.h"
@@ -16,17 +19,25 @@ struct EvalOptions {
   double lostMm = 50.0;
 };
 
-bool writeText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream f(path);
-  f << text;
-  return static_cast<bool>(f);
-}
-
 int runEval(const EvalOptions& o) {
   auto gt = eval::readKeypointsJsonl(o.gt);
   if (!gt) throw UsageError(gt.message());
   auto pred = eval::readKeypointsJsonl(o.pred, o.side);
   if (!pred) throw UsageError(pred.message());
+  const auto anyHand = [](const eval::KeypointSequence& k) {
+    return std::any_of(k.frames.begin(), k.frames.end(),
+                       [](const auto& f) { return f.has_value(); });
+  };
+  if (!anyHand(*pred)) {
+    // No frame of this side: a wrong --side (a mean over 0 frames says nothing) unless the
+    // other side is lost throughout too.
+    const std::string other = o.side == "right" ? "left" : "right";
+    auto otherHand = eval::readKeypointsJsonl(o.pred, other);
+    if (otherHand && anyHand(*otherHand)) {
+      throw UsageError("--side " + o.side + ": " + o.pred + " has no tracked " + o.side +
+                       " hand (it has the " + other + " one; use --side " + other + ")");
+    }
+  }
   eval::SequenceKeypoints s;
   s.groundTruth = gt->frames;
   s.predicted = pred->frames;
@@ -42,13 +53,15 @@ int runEval(const EvalOptions& o) {
   std::fputs(eval::summaryText(*m).c_str(), stdout);
   if (!o.out.empty()) {
     const std::filesystem::path dir(o.out);
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
     const std::string title = std::filesystem::path(o.pred).filename().string();
-    if (!writeText(dir / "report.md", eval::markdownReport(*m, "Evaluation of " + title)) ||
-        !writeText(dir / "error_over_time.svg", eval::svgErrorOverTime(*m, "Error over time")) ||
-        !writeText(dir / "success_curve.svg", eval::svgSuccessCurve(*m, "Success curve"))) {
-      throw std::runtime_error("cannot write the report into " + dir.string());
+    // Each file whole or not at all; the message names the one that failed.
+    for (const auto& [name, text] :
+         {std::pair<const char*, std::string>{"report.md",
+                                              eval::markdownReport(*m, "Evaluation of " + title)},
+          {"error_over_time.svg", eval::svgErrorOverTime(*m, "Error over time")},
+          {"success_curve.svg", eval::svgSuccessCurve(*m, "Success curve")}}) {
+      const Status written = writeFileAtomically(dir / name, text);
+      if (!written) throw std::runtime_error(written.message());
     }
     std::printf("wrote %s/{report.md,error_over_time.svg,success_curve.svg}\n", dir.c_str());
   }

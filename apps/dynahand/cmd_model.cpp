@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <string>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/command.h"
 #include "dynahand/model.h"
 #include "dynahand/model_intel.h"
@@ -47,10 +48,7 @@ const CommandRegistration kModelCommand{Command{
         if (flags->left && flags->right) throw UsageError("--left and --right are exclusive");
         if (!flags->check.empty()) {
           const Result<model::ArticulatedModel> m = model::loadModel(flags->check);
-          if (!m) {
-            std::fprintf(stderr, "dynahand model: %s\n", m.message().c_str());
-            return kExitFailure;
-          }
+          if (!m) throw UsageError(m.message());
           float mass = 0.0f;
           for (const model::Body& b : m->bodies()) mass += b.mass;
           std::printf("%s: ok: '%s', %d bodies, %d joints, %zu keypoints, %.3f kg%s\n",
@@ -62,29 +60,20 @@ const CommandRegistration kModelCommand{Command{
         std::string text;
         if (!flags->fromIntel.empty()) {
           const Result<model::IntelModel> imported = model::importIntelModel(flags->fromIntel);
-          if (!imported) {
-            std::fprintf(stderr, "dynahand model: %s\n", imported.message().c_str());
-            return kExitFailure;
-          }
+          if (!imported) throw UsageError(imported.message());
           text = model::modelToJson(imported->model);
         } else {
           text = model::modelToJson(model::makeDefaultHand(
               flags->dims, flags->left ? model::Side::Left : model::Side::Right));
         }
         if (flags->out.empty()) {
-          std::fwrite(text.data(), 1, text.size(), stdout);
-          return std::fflush(stdout) == 0 ? kExitOk : kExitFailure;
+          const bool written = std::fwrite(text.data(), 1, text.size(), stdout) == text.size();
+          if (std::fflush(stdout) != 0 || !written || std::ferror(stdout) != 0)
+            throw std::runtime_error("standard output: write failed (disk full?)");
+          return kExitOk;
         }
-        std::FILE* f = std::fopen(flags->out.c_str(), "wb");
-        if (!f) {
-          std::fprintf(stderr, "dynahand model: %s: cannot open for writing\n", flags->out.c_str());
-          return kExitFailure;
-        }
-        const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-        if (std::fclose(f) != 0 || !written) {
-          std::fprintf(stderr, "dynahand model: %s: write failed\n", flags->out.c_str());
-          return kExitFailure;
-        }
+        const Status s = writeFileAtomically(flags->out, text);
+        if (!s) throw std::runtime_error(s.message());
         return kExitOk;
       };
     }}};

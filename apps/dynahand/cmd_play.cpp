@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/command.h"
 #include "dynahand/model_pose.h"
 #include "dynahand/playground.h"
@@ -70,7 +71,7 @@ class TrackedSource : public PoseSource {
   std::optional<Intrinsics> intrinsics() const override { return reader_.info().intrinsics; }
   std::optional<model::ModelPose> pose(int i) override {
     auto frame = reader_.frame(i);
-    if (!frame) throw std::runtime_error(frame.message());
+    if (!frame) throw UsageError(frame.message());  // a depth frame that does not decode
     const track::TrackResult& r = tracker_->track(*frame);
     if (r.hands.empty() || !r.hands.front().tracked) return std::nullopt;
     return r.hands.front().pose;
@@ -96,7 +97,10 @@ std::unique_ptr<PoseSource> openSource(const PlayOptions& o, const model::Articu
   auto reader = SequenceReader::open(o.input);
   if (!reader) throw UsageError(reader.message());
   auto tracker = track::Tracker::create(hand, reader->info().intrinsics);
-  if (!tracker) throw std::runtime_error(tracker.message());
+  if (!tracker) {
+    if (detectorWeightsGiven("")) throw UsageError(tracker.message());  // DYNAHAND_DETECTOR
+    throw std::runtime_error(tracker.message());
+  }
   if (o.init == "gt") {
     const auto gt = reader->groundTruth(0);
     if (!gt) throw UsageError("--init gt: " + o.input + " has no ground truth for frame 0");
@@ -140,7 +144,10 @@ std::unique_ptr<viewer::ViewerServer> startViewer(PlayOptions o) {
   o.server.webRoot = viewer::findViewerPage(o.webRoot);
   std::string error;
   auto server = viewer::ViewerServer::start(o.server, &error);
-  if (!server) throw std::runtime_error(error);
+  if (!server) {
+    if (error.rfind("--host:", 0) == 0) throw UsageError(error);  // no address: bad input
+    throw std::runtime_error(error);
+  }
   viewer::printViewerAddress(o.server, *server, o.webRoot);
   return server;
 }
@@ -204,11 +211,12 @@ int runPlay(const PlayOptions& o) {
   if (o.eye.size() == 3) view.eye = Vec3(o.eye[0], o.eye[1], o.eye[2]);
   if (o.target.size() == 3) view.target = Vec3(o.target[0], o.target[1], o.target[2]);
   if (!o.framesDir.empty()) std::filesystem::create_directories(o.framesDir);
-  std::ofstream out;
+  // --out goes to NAME.part, renamed when the first pass is complete.
+  AtomicFileWriter outFile;
   if (!o.out.empty()) {
-    out.open(o.out);
-    if (!out) throw UsageError("cannot write " + o.out);
+    if (!outFile.open(o.out)) throw UsageError("cannot write " + o.out);
   }
+  std::ostream* out = o.out.empty() ? nullptr : &outFile.stream();
   std::unique_ptr<viewer::ViewerServer> server;
   std::optional<ServedClock> clock;
   if (o.serve) {
@@ -231,7 +239,7 @@ int runPlay(const PlayOptions& o) {
     if (!pg) throw UsageError(pg.message());
     if (auto camera = source->intrinsics()) (*pg)->setCameraIntrinsics(*camera);
     if (server) server->setWelcome({viewer::sceneMessage(viewerBodies(**pg), "y")});
-    if (pass == 0 && out.is_open()) out << playground::playHeaderJson(**pg) << '\n';
+    if (pass == 0 && out != nullptr) *out << playground::playHeaderJson(**pg) << '\n';
     Progress progress("play", total);
     for (int i = 0; i < total && !interrupted(); ++i) {
       if (clock && !clock->waitForNextFrame()) break;
@@ -241,7 +249,7 @@ int runPlay(const PlayOptions& o) {
       if (server && server->hasClients()) server->publish(scenePoses(**pg, i));
       if (pass > 0) continue;
       lost += pose ? 0 : 1;
-      if (out.is_open()) out << playground::playFrameJson(**pg, i) << '\n';
+      if (out != nullptr) *out << playground::playFrameJson(**pg, i) << '\n';
       if (!o.framesDir.empty() && i % o.renderEvery == 0) {
         char name[32];
         std::snprintf(name, sizeof name, "%06d.png", i);
@@ -256,7 +264,10 @@ int runPlay(const PlayOptions& o) {
     if (pass == 0) {
       simulated = (*pg)->time();
       progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
-      if (out.is_open()) out.flush();
+      if (out != nullptr) {
+        const Status s = outFile.commit();
+        if (!s) throw std::runtime_error(s.message());
+      }
     }
     if (server && !o.loop && !interrupted()) {
       // Pages opened from now on see the final state too.
@@ -268,7 +279,7 @@ int runPlay(const PlayOptions& o) {
     }
   }
   std::printf("frames %d  hand lost in %d  simulated %.2f s\n", done, lost, simulated);
-  if (out.is_open()) std::printf("wrote %s\n", o.out.c_str());
+  if (out != nullptr) std::printf("wrote %s\n", o.out.c_str());
   if (!o.framesDir.empty()) std::printf("wrote pictures to %s\n", o.framesDir.c_str());
   // Ctrl-C is how a served session ends, not an interruption of its output.
   if (server) return done == total ? kExitOk : 130;

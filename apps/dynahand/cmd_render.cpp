@@ -9,6 +9,7 @@
 #include <numbers>
 #include <optional>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/command.h"
 #include "dynahand/model.h"
 #include "dynahand/overlay.h"
@@ -19,6 +20,7 @@
 #ifdef DYNAHAND_HAVE_VIDEOIO
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <opencv2/videoio/registry.hpp>
 #endif
 
 namespace dynahand::cli {
@@ -44,7 +46,9 @@ Vec3 centreOf(const model::ModelPose& pose) {
   return sum / static_cast<float>(std::max<std::size_t>(1, pose.bodies.size()));
 }
 
-// Writes PNG frames to a folder or an MP4/AVI through OpenCV's video writer.
+// Writes PNG frames to a folder or an MP4/AVI through OpenCV's video writer. A video goes to
+// NAME.part.EXT (the extension picks the codec) and is renamed to NAME by finish(); a run that
+// fails before deletes it, so no partial video is left under NAME.
 class FrameSink {
  public:
   FrameSink(const std::filesystem::path& out, float fps) : out_(out), fps_(fps) {
@@ -66,6 +70,20 @@ class FrameSink {
       std::filesystem::create_directories(out.parent_path(), ec);
     }
   }
+  FrameSink(const FrameSink&) = delete;
+  FrameSink& operator=(const FrameSink&) = delete;
+  ~FrameSink() {
+#ifdef DYNAHAND_HAVE_VIDEOIO
+    if (video_ && !finished_) {
+      writer_.release();
+      std::error_code ec;
+      std::filesystem::remove(part(), ec);
+    }
+#endif
+  }
+  std::filesystem::path part() const {
+    return partPath(out_, true);
+  }
   void write(const eval::RgbImage& image, int frame) {
     if (!video_) {
       char name[32];
@@ -79,7 +97,7 @@ class FrameSink {
     if (!writer_.isOpened()) {
       const int fourcc = out_.extension() == ".avi" ? cv::VideoWriter::fourcc('M', 'J', 'P', 'G')
                                                     : cv::VideoWriter::fourcc('m', 'p', '4', 'v');
-      writer_.open(out_.string(), fourcc, fps_, cv::Size(image.width, image.height));
+      writer_.open(part().string(), fourcc, fps_, cv::Size(image.width, image.height));
       if (!writer_.isOpened()) {
         throw std::runtime_error(out_.string() + ": OpenCV could not open a video writer");
       }
@@ -91,6 +109,31 @@ class FrameSink {
     ++written_;
 #endif
   }
+  // A video: closes it, checks that it reads back whole (OpenCV's writer reports no write
+  // errors, e.g. on a full disk) and renames it to its name. PNG frames: nothing to do.
+  void finish() {
+#ifdef DYNAHAND_HAVE_VIDEOIO
+    if (!video_ || finished_) return;
+    finished_ = true;
+    if (written_ == 0) return;
+    writer_.release();
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(part(), ec);
+    bool whole = !ec && size > 0;
+    if (whole && cv::videoio_registry::hasBackend(cv::CAP_FFMPEG)) {
+      cv::VideoCapture check(part().string(), cv::CAP_FFMPEG);
+      whole =
+          check.isOpened() && check.get(cv::CAP_PROP_FRAME_COUNT) >= static_cast<double>(written_);
+    }
+    if (!whole) {
+      std::filesystem::remove(part(), ec);
+      throw std::runtime_error(out_.string() +
+                               ": the video could not be written in full (disk full?)");
+    }
+    const Status s = commitPart(part(), out_);
+    if (!s) throw std::runtime_error(s.message());
+#endif
+  }
   int written() const {
     return written_;
   }
@@ -99,6 +142,7 @@ class FrameSink {
   std::filesystem::path out_;
   float fps_;
   bool video_ = false;
+  bool finished_ = false;
   int written_ = 0;
 #ifdef DYNAHAND_HAVE_VIDEOIO
   cv::VideoWriter writer_;
@@ -197,7 +241,7 @@ int runRender(const RenderOptions& o) {
   int done = 0;
   for (std::size_t i = 0; i < chosen.size() && !interrupted(); ++i) {
     auto depth = reader->frame(chosen[i]->frame);
-    if (!depth) throw std::runtime_error(depth.message());
+    if (!depth) throw UsageError(depth.message());  // bad input: the partial video is deleted
     Panels p = drawFrame(*depth, info.intrinsics, *chosen[i], right, left, o, target);
     if (sink) sink->write(eval::besideEachOther({p.front, p.side}), chosen[i]->frame);
     if (std::find(sheetAt.begin(), sheetAt.end(), i) != sheetAt.end()) {
@@ -220,6 +264,7 @@ int runRender(const RenderOptions& o) {
     progress.update(++done);
   }
   progress.finish(interrupted() ? "(interrupted: frames up to here are written)" : "");
+  if (sink) sink->finish();
   if (sink) std::printf("wrote %d frames to %s\n", sink->written(), o.out.c_str());
   if (!o.sheet.empty()) {
     const Status s = eval::contactSheet(tiles, o.sheetColumns).savePng(o.sheet);

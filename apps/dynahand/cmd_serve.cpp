@@ -29,7 +29,8 @@ int runServe(ServeCommandOptions o) {
   auto server = viewer::ViewerServer::start(o.server, &error);
   if (!server) {
     std::fprintf(stderr, "dynahand serve: %s\n", error.c_str());
-    return kExitFailure;
+    // A --host that is no address is bad input; a port in use is not.
+    return error.rfind("--host:", 0) == 0 ? kExitUsage : kExitFailure;
   }
   server->setWelcome({(*session)->hello()});
   viewer::printViewerAddress(o.server, *server, o.webRoot);
@@ -62,7 +63,8 @@ int runServe(ServeCommandOptions o) {
     const Status s = (*session)->step(server.get(), paused);
     if (!s) {
       std::fprintf(stderr, "dynahand serve: %s\n", s.message().c_str());
-      return kExitFailure;
+      // A recording's frame that does not decode is bad input; a camera that stops is not.
+      return (*session)->live() ? kExitFailure : kExitUsage;
     }
     if (paced) {
       due += period;

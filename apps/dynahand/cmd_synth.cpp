@@ -1,9 +1,12 @@
 // dynahand synth: writes a synthetic depth sequence with ground truth (docs/synth.md).
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <string>
+#include <vector>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/command.h"
 #include "dynahand/progress.h"
 #include "dynahand/synth.h"
@@ -24,6 +27,40 @@ void listClipsAndProfiles() {
   std::printf("\nDefault clip set: ");
   for (const std::string& name : synth::defaultClipSet()) std::printf("%s ", name.c_str());
   std::printf("\n");
+}
+
+// Seeds are unsigned: CLI11 would read -1 as 2^64-1.
+const CLI::Validator kNonNegative(
+    [](std::string& value) -> std::string {
+      if (value.find('-') != std::string::npos)
+        return "must be a whole number >= 0 (got " + value + ")";
+      return {};
+    },
+    "", "NONNEGATIVE");
+
+// OUT without a trailing separator (so that OUT.part is its sibling).
+std::filesystem::path folderPath(const std::string& out) {
+  std::filesystem::path p = std::filesystem::path(out).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  return p;
+}
+
+// Moves a finished sequence from `part` into `out` (created if missing): camera.json last, as
+// it makes the folder a sequence; `part` is removed once empty.
+Status moveInto(const std::filesystem::path& part, const std::filesystem::path& out) {
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) return Error{out.string() + ": cannot create: " + ec.message()};
+  std::vector<std::filesystem::path> entries;
+  for (const auto& e : std::filesystem::directory_iterator(part, ec))
+    if (e.path().filename() != "camera.json") entries.push_back(e.path());
+  if (ec) return Error{part.string() + ": " + ec.message()};
+  entries.push_back(part / "camera.json");
+  for (const auto& e : entries) {
+    if (Status s = commitPart(e, out / e.filename()); !s) return s;
+  }
+  std::filesystem::remove(part, ec);
+  return Ok{};
 }
 
 const CommandRegistration kSynthCommand{Command{
@@ -59,7 +96,9 @@ const CommandRegistration kSynthCommand{Command{
       sub.add_option("--speed", o.speed, "clip speed multiplier")
           ->capture_default_str()
           ->check(CLI::Range(0.01, 100.0));
-      sub.add_option("--seed", o.seed, "sensor noise seed")->capture_default_str();
+      sub.add_option("--seed", o.seed, "sensor noise seed")
+          ->capture_default_str()
+          ->check(kNonNegative);
       sub.add_option("--out", flags->out, "output directory (must not hold a sequence)");
       sub.add_option("--placement", flags->placement,
                      "camera placement: desk (facing the user) or head (head-mounted; re-places "
@@ -95,7 +134,8 @@ const CommandRegistration kSynthCommand{Command{
           ->check(CLI::Range(0.0, 0.5));
       sub.add_option("--proportion-seed", flags->proportionSeed,
                      "seed of the random hand proportions")
-          ->capture_default_str();
+          ->capture_default_str()
+          ->check(kNonNegative);
       sub.add_flag("--list", flags->list, "list clips and sensor profiles and exit");
       sub.add_option(
           "--contact-sheet", flags->contactSheet,
@@ -149,7 +189,24 @@ const CommandRegistration kSynthCommand{Command{
           progress.update(done);
           return !interrupted();
         };
-        if (Status s = synth::writeSequence(*seq, flags->out, report); !s) {
+        // Written to OUT.part and moved into OUT at the end (camera.json last): a run that
+        // fails part-way leaves OUT.part, never a shorter sequence under OUT.
+        const std::filesystem::path out = folderPath(flags->out);
+        if (std::filesystem::exists(out / "camera.json") || std::filesystem::exists(out / "depth"))
+          throw UsageError(
+              flags->out +
+              ": already holds a sequence (camera.json or depth/); choose a new folder");
+        const std::filesystem::path part = partPath(out);
+        if (std::filesystem::exists(part) && !std::filesystem::is_empty(part))
+          throw UsageError(part.string() +
+                           ": left by a synth run that did not finish; delete it or choose "
+                           "another --out");
+        if (Status s = synth::writeSequence(*seq, part, report); !s) {
+          std::fprintf(stderr, "dynahand synth: %s (%s is incomplete; %s not written)\n",
+                       s.message().c_str(), part.c_str(), flags->out.c_str());
+          return kExitFailure;
+        }
+        if (Status s = moveInto(part, out); !s) {
           std::fprintf(stderr, "dynahand synth: %s\n", s.message().c_str());
           return kExitFailure;
         }

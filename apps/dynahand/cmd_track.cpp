@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/camera.h"
 #include "dynahand/command.h"
 #include "dynahand/hand_size.h"
@@ -55,6 +56,11 @@ std::unique_ptr<DepthCamera> openCamera(const std::string& input) {
   }
   auto camera = DepthCamera::open(spec);
   if (!camera) {
+    // An unknown back end is bad input; a known one that does not open is not.
+    const std::string backend = spec.substr(0, spec.find(':'));
+    const auto known = cameraBackends();
+    if (!spec.empty() && std::find(known.begin(), known.end(), backend) == known.end())
+      throw UsageError(input + ": " + camera.message());
     throw std::runtime_error(input + ": " + camera.message() + " (tried back ends: " + backends +
                              ")");
   }
@@ -142,7 +148,7 @@ int runTrack(const TrackOptions& o) {
       if (!s) throw std::runtime_error(o.input + ": " + s.message());
     } else {
       auto recorded = in.reader->frame(f);
-      if (!recorded) throw std::runtime_error(recorded.message());
+      if (!recorded) throw UsageError(recorded.message());  // a frame that does not decode
       out = std::move(*recorded);
     }
   };
@@ -178,7 +184,11 @@ int runTrack(const TrackOptions& o) {
   }
 
   auto tracker = track::Tracker::create(*hand, info.intrinsics, settings);
-  if (!tracker) throw std::runtime_error(tracker.message());
+  if (!tracker) {
+    // The hand model is checked already (handModel); what is left is the detector's weights.
+    if (detectorWeightsGiven(o.detector)) throw UsageError(tracker.message());
+    throw std::runtime_error(tracker.message());
+  }
   if (startPose && !(handSize && handSize->estimated)) {
     (*tracker)->initialize(*startPose);
   } else if (startKeypoints) {  // a pose of another model size starts from its keypoints
@@ -202,7 +212,14 @@ int runTrack(const TrackOptions& o) {
     csv = std::move(*w);
   }
   std::optional<io::BvhWriter> bvh;
-  if (!o.bvh.empty()) bvh.emplace(*hand, info.framesPerSecond);
+  if (!o.bvh.empty()) {
+    // Written at the end: find out now whether it can be (a path below a file, say).
+    AtomicFileWriter probe;
+    if (!probe.open(o.bvh)) throw UsageError(o.bvh + ": cannot write");
+    std::error_code ec;
+    std::filesystem::remove(probe.part(), ec);
+    bvh.emplace(*hand, info.framesPerSecond);
+  }
 
   installInterruptHandler();
   Progress progress("track", in.camera ? 0 : last - first);

@@ -16,8 +16,11 @@ namespace dynahand::cli {
 
 // Exit codes shared by all subcommands.
 inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailure = 1;  // the job ran and failed (bad data, missed target)
-inline constexpr int kExitUsage = 2;    // bad flags, bad values, missing input path
+inline constexpr int kExitFailure = 1;  // the job ran and failed, not for its input (a full
+                                        // disk, no camera, a missed benchmark target)
+inline constexpr int kExitUsage = 2;    // bad input: flags, values, a missing or malformed input
+                                        // file (also found while running: a frame that does not
+                                        // decode); UsageError
 
 struct Command {
   std::string name;
@@ -32,11 +35,20 @@ struct CommandRegistration {
   explicit CommandRegistration(Command command) { commandRegistry().push_back(std::move(command)); }
 };
 
-// Thrown by a command for a usage problem found after parsing (e.g. a missing
-// input path); main prints the message and exits with kExitUsage.
+// Thrown by a command for bad input found after parsing (a missing input path, a file that
+// does not parse, a depth frame that does not decode); main prints the message and exits with
+// kExitUsage.
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// Adds a check to every option of `app` and its subcommands that takes floating-point values:
+// NaN and infinities are refused (exit kExitUsage, the message names the option).
+void requireFiniteFloats(CLI::App& app);
+
+// Whether the user chose the detector weights (--detector FILE, or DYNAHAND_DETECTOR): then
+// weights that do not load are bad input (kExitUsage), otherwise a broken installation.
+bool detectorWeightsGiven(const std::string& detectorOption);
 
 // --model / --hand-length / --hand-width: the hand model a recording is (or was) tracked with.
 struct HandModelOptions {

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     CLI::App* sub = app.add_subcommand(command.name, command.summary);
     runners[sub] = command.setup(*sub);
   }
+  requireFiniteFloats(app);
 
   try {
     app.parse(argc, argv);

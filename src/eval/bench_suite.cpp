@@ -301,7 +301,7 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   if (!tracker) return Error{tracker.message()};
   SuiteItemResult result;
   result.item = item;
-  result.keypoints.fps = so.framesPerSecond;
+  result.keypoints.fps = static_cast<double>(so.framesPerSecond);
   for (int f = 0; f < item.frames; ++f) {
     const synth::SyntheticFrame& frame = seq->frame(f);
     if (f == 0 && !item.autoInit) (*tracker)->initialize(frame.hands[0].pose);

@@ -52,6 +52,13 @@ Result<KeypointSequence> readKeypointsJsonl(const std::filesystem::path& path,
     const std::string where = path.string() + ":" + std::to_string(lineNumber) + ": ";
     json obj = json::parse(line, nullptr, /*allow_exceptions=*/false);
     if (obj.is_discarded() || !obj.is_object()) return Error{where + "not a JSON object"};
+    if (obj.contains("version")) {  // tracker output (track_io.h): format version 1
+      if (!obj["version"].is_number_integer())
+        return Error{where + "\"version\" must be an integer"};
+      if (obj["version"].get<std::int64_t>() > 1)
+        return Error{where + "\"version\" " + obj["version"].dump() +
+                     " is newer than this dynahand understands (1)"};
+    }
     std::int64_t frame = nextFrame;
     if (obj.contains("frame")) {
       if (!obj["frame"].is_number_integer()) return Error{where + "\"frame\" must be an integer"};

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <numbers>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/model_pose.h"
 #include "dynahand/track_io.h"
 
@@ -153,10 +154,7 @@ std::string BvhWriter::text() const {
 }
 
 Status BvhWriter::save(const std::filesystem::path& path) const {
-  std::ofstream out(path);
-  out << text();
-  if (!out) return Error{path.string() + ": cannot write"};
-  return Ok{};
+  return writeFileAtomically(path, text());  // never a truncated file under PATH
 }
 
 }  // namespace dynahand::io

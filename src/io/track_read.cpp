@@ -120,6 +120,11 @@ Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& pa
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     try {
       const json j = json::parse(line);
+      if (j.contains("version") && readInt(j["version"], "version") > kTrackFormatVersion) {
+        throw std::runtime_error(
+            fmt::format("\"version\" {} is newer than this dynahand understands ({})",
+                        readInt(j["version"], "version"), kTrackFormatVersion));
+      }
       TrackedFrame frame;
       frame.frame = readInt(j.at("frame"), "frame");
       frame.timeMs = j.value("time_ms", 0.0);

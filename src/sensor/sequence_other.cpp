@@ -148,7 +148,8 @@ Result<OpenedSource> openPngFolder(const fs::path& dir, const SequenceOpenOption
     if (!options.intrinsics) {
       return Error{dir.string() +
                    ": a folder of 16-bit PNGs without camera.json needs the camera intrinsics "
-                   "(SequenceOpenOptions::intrinsics, or --intrinsics on the command line)"};
+                   "(write a camera.json beside them, docs/formats.md; from code: "
+                   "SequenceOpenOptions::intrinsics)"};
     }
     opened.info.format = "png16";
     opened.info.intrinsics = *options.intrinsics;

@@ -55,6 +55,16 @@ TEST(KeypointIo, ReadsTrackerOutputBySideAndTrackedFlag) {
   EXPECT_FLOAT_EQ((*left->frames[0])[0].x(), -0.1f);
 }
 
+TEST(KeypointIo, RefusesANewerTrackFormatVersion) {
+  const auto path = writeFile("v2.jsonl",
+                              "{\"version\":1,\"frame\":0,\"keypoints21\":null}\n"
+                              "{\"version\":2,\"frame\":1,\"keypoints21\":null}\n");
+  auto seq = readKeypointsJsonl(path);
+  ASSERT_FALSE(seq.ok());
+  EXPECT_NE(seq.message().find("v2.jsonl:2: \"version\" 2 is newer"), std::string::npos)
+      << seq.message();
+}
+
 TEST(KeypointIo, ErrorsNameFileAndLine) {
   auto bad =
       readKeypointsJsonl(writeFile("bad.jsonl", "{\"frame\":0,\"keypoints21\":null}\nnot json\n"));

@@ -138,6 +138,8 @@ TEST(TrackRead, BadNumbersAreErrorsNamingLineAndField) {
       {R"({"frame":2147483648,"hands":[]})", "frame: 2147483648 is not a whole number"},
       {R"({"frame":0,"hand_size":{"length":0.19,"width":0.08,"frames":1e20},"hands":[]})",
        "hand_size.frames: 1e+20 is not a whole number"},
+      {R"({"version":2,"frame":0,"hands":[]})",
+       "\"version\" 2 is newer than this dynahand understands (1)"},
       {R"({"frame":0,"hand_size":{"length":"x","width":0.08},"hands":[]})",
        "hand_size.length: \"x\" is not in [0.05, 0.6] m"},
       {R"({"frame":0,"hand_size":{"length":0.19,"width":1e-30},"hands":[]})",

@@ -32,19 +32,23 @@ KEYPOINTS = 21
 HEAT = 16  # heat map cells per side
 HALF_CROP_MM = 150.0  # one normalised crop unit (kCropSizeM / 2), mm
 CONFIDENCE_SCALE_MM = 20.0  # confidence target exp(-error / this)
+# One sample of the data file: the crop's bytes, 21 x (u, v, d), sensor profile and pose source.
+RECORD = [("pixels", "u1", (CROP * CROP,)), ("uvd", "<f4", (KEYPOINTS * 3,)), ("meta", "<i4", (2,))]
 
 
 def read_data(path):
     """The detector data file (docs/formats/detector-data.md) as numpy arrays."""
     with open(path, "rb") as f:
         head = f.read(20)
-    if head[:4] != b"DHKD":
+    if len(head) < 20 or head[:4] != b"DHKD":
         raise ValueError(f"{path}: not a detector data file")
     version, count, crop, keypoints = np.frombuffer(head[4:], dtype="<u4")
     if version != 1 or crop != CROP or keypoints != KEYPOINTS:
         raise ValueError(f"{path}: version {version}, crop {crop}, keypoints {keypoints} not supported")
-    record = np.dtype([("pixels", "u1", (CROP * CROP,)), ("uvd", "<f4", (KEYPOINTS * 3,)),
-                       ("meta", "<i4", (2,))])
+    record = np.dtype(RECORD)
+    if os.path.getsize(path) != 20 + int(count) * record.itemsize:
+        raise ValueError(f"{path}: {os.path.getsize(path)} bytes, not the 20 + {count} x "
+                         f"{record.itemsize} its header promises (truncated or not this format)")
     data = np.memmap(path, dtype=record, mode="r", offset=20, shape=(int(count),))
     return np.ascontiguousarray(data["pixels"]), np.ascontiguousarray(data["uvd"])
 
@@ -130,18 +134,18 @@ def import_dynahand(exe, module_dir=None):
     return module
 
 
-def generate(dynahand, split, count, seed, path, threads, module=None):
-    """The data file (docs/formats/detector-data.md) at path unless it is there: made by
-    dynahand.detector_data (module) or the command, the same bytes either way."""
-    if os.path.exists(path):
-        return
+CACHE_CHECK = 64  # samples remade to check a cached file against the generator of today
+
+
+def make_file(dynahand, split, count, seed, path, threads, module):
+    """Writes the data file (docs/formats/detector-data.md): dynahand.detector_data (module) or
+    the command, the same bytes either way."""
     if module is None:
         subprocess.run([dynahand, "detector", "data", "--split", split, "--count", str(count),
                         "--seed", str(seed), "--threads", str(threads), "-o", path], check=True)
         return
     data = module.detector_data(split=split, count=count, seed=seed, threads=threads)
-    records = np.empty(count, [("pixels", "u1", (CROP * CROP,)), ("uvd", "<f4", (KEYPOINTS * 3,)),
-                               ("meta", "<i4", (2,))])
+    records = np.empty(count, RECORD)
     records["pixels"] = data["pixels"].reshape(count, -1)
     records["uvd"] = data["uvd"].reshape(count, -1)
     records["meta"] = np.stack([data["profile"], data["source"]], axis=1)
@@ -149,6 +153,35 @@ def generate(dynahand, split, count, seed, path, threads, module=None):
         f.write(b"DHKD" + np.array([1, count, CROP, KEYPOINTS], dtype="<u4").tobytes())
         records.tofile(f)
     os.replace(path + ".partial", path)
+
+
+def cache_is_current(dynahand, split, count, seed, path, threads, module):
+    """Whether a cached file holds what the generator makes today. Sample i depends on (seed, i)
+    alone, so its first samples are remade and compared: a file from an older generator (another
+    crop rule, other scenes) would otherwise train a network on data the tracker never shows it."""
+    check = min(CACHE_CHECK, count)
+    fresh = path + ".check"
+    make_file(dynahand, split, check, seed, fresh, threads, module)
+    try:
+        record = np.dtype(RECORD).itemsize
+        with open(fresh, "rb") as f:
+            expected = f.read()[20:20 + check * record]
+        with open(path, "rb") as f:
+            head = f.read(20)
+            cached = f.read(check * record)
+    finally:
+        os.remove(fresh)
+    stored = np.frombuffer(head[4:20], dtype="<u4") if len(head) == 20 else None
+    return stored is not None and int(stored[1]) == count and cached == expected
+
+
+def generate(dynahand, split, count, seed, path, threads, module=None):
+    """The data file at path: kept when it is there and current, else made (again)."""
+    if os.path.exists(path):
+        if cache_is_current(dynahand, split, count, seed, path, threads, module):
+            return
+        print(f"detector data: {path} was made by another generator; making it again", flush=True)
+    make_file(dynahand, split, count, seed, path, threads, module)
 
 
 def to_input(pixels, rng=None):

@@ -60,9 +60,20 @@ def test_training_script_makes_the_same_file(tmp_path, monkeypatch):
     assert not (tmp_path / "module.bin.partial").exists()
     pixels, uvd = train_detector.read_data(str(by_module))
     assert pixels.shape == (20, 64 * 64) and uvd.shape == (20, 63)
-    by_module.write_bytes(b"cached")  # a file already there is kept (reruns skip the data)
+    # A current cached file is kept (reruns skip the data); one the generator no longer makes
+    # (another generator's, or damaged) is made again.
+    stamp = by_module.stat().st_mtime_ns
     train_detector.generate(exe, "held-back", 20, 3, str(by_module), 2, dynahand)
-    assert by_module.read_bytes() == b"cached"
+    assert by_module.stat().st_mtime_ns == stamp
+    damaged = bytearray(by_command.read_bytes())
+    damaged[100] ^= 0xFF
+    by_module.write_bytes(bytes(damaged))
+    train_detector.generate(exe, "held-back", 20, 3, str(by_module), 2, dynahand)
+    assert by_module.read_bytes() == by_command.read_bytes()
+    by_module.write_bytes(b"cached")
+    train_detector.generate(exe, "held-back", 20, 3, str(by_module), 2)
+    assert by_module.read_bytes() == by_command.read_bytes()
+    assert not list(tmp_path.glob("*.check"))
 
 
 def script_module(tmp_path, exe, module_dir=None, pythonpath=None):

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "dynahand/atomic_file.h"
 #include "dynahand/model.h"
 #include "dynahand/tracker.h"
 
@@ -59,12 +60,10 @@ class TrackWriter {
 
  private:
   TrackWriter() = default;
-  std::filesystem::path path_;
-  std::filesystem::path partPath_;  // written until close()
   const model::ArticulatedModel* model_ = nullptr;
   JsonOptions options_;
   Format format_ = Format::JsonLines;
-  std::ofstream out_;
+  AtomicFileWriter file_;         // PATH.part until close()
   model::ModelPose lastTracked_;  // .pose: repeated while the hand is lost
   int pendingLines_ = 0;          // .pose: frames before the first tracked one
 };

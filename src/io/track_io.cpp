@@ -164,7 +164,6 @@ Result<std::unique_ptr<TrackWriter>> TrackWriter::create(const std::filesystem::
                                                          const model::ArticulatedModel& model,
                                                          const JsonOptions& options) {
   auto w = std::unique_ptr<TrackWriter>(new TrackWriter());
-  w->path_ = path;
   w->model_ = &model;
   w->options_ = options;
   const std::string ext = path.extension().string();
@@ -178,26 +177,20 @@ Result<std::unique_ptr<TrackWriter>> TrackWriter::create(const std::filesystem::
     return Error{path.string() + ": unknown output format '" + ext +
                  "' (use .jsonl, .csv or .pose)"};
   }
-  if (path.has_parent_path()) {
-    std::error_code ec;
-    std::filesystem::create_directories(path.parent_path(), ec);
-  }
-  w->partPath_ = path;
-  w->partPath_ += ".part";
-  w->out_.open(w->partPath_, std::ios::out | std::ios::trunc);
-  if (!w->out_) return Error{w->partPath_.string() + ": cannot write"};
+  if (Status opened = w->file_.open(path); !opened) return Error{opened.message()};
   if (w->format_ == Format::Csv) {
-    w->out_ << "frame,time_ms,side,tracked,error_m,simulation";
+    w->file_.stream() << "frame,time_ms,side,tracked,error_m,simulation";
     const auto& names = model::keypoint21Names();
-    for (const char* name : names) w->out_ << ',' << name << "_x," << name << "_y," << name << "_z";
-    w->out_ << '\n';
+    for (const char* name : names)
+      w->file_.stream() << ',' << name << "_x," << name << "_y," << name << "_z";
+    w->file_.stream() << '\n';
   }
   return w;
 }
 
 Status TrackWriter::write(const track::TrackResult& r) {
   if (format_ == Format::JsonLines) {
-    out_ << trackResultToJson(r, *model_, options_) << '\n';
+    file_.stream() << trackResultToJson(r, *model_, options_) << '\n';
   } else if (format_ == Format::IntelPose) {
     // The format has no frame numbers, so every frame gets a line: lost frames repeat
     // the last tracked pose, and frames before the first tracked one wait for it.
@@ -208,7 +201,7 @@ Status TrackWriter::write(const track::TrackResult& r) {
       return Ok{};
     }
     const std::string line = model::intelPoseLine(lastTracked_, *model_);
-    for (; pendingLines_ >= 0; --pendingLines_) out_ << line << '\n';
+    for (; pendingLines_ >= 0; --pendingLines_) file_.stream() << line << '\n';
     pendingLines_ = 0;
   } else {
     for (const auto& hand : r.hands) {
@@ -222,23 +215,14 @@ Status TrackWriter::write(const track::TrackResult& r) {
           row += ",,,";
         }
       }
-      out_ << row << '\n';
+      file_.stream() << row << '\n';
     }
   }
-  out_.flush();  // an interrupted run keeps every frame written so far
-  if (!out_) return Error{partPath_.string() + ": write failed"};
-  return Ok{};
+  return file_.flush();  // an interrupted run keeps every frame written so far
 }
 
 Status TrackWriter::close() {
-  if (!out_.is_open()) return Ok{};  // closed (and renamed) already
-  out_.close();
-  if (out_.fail()) return Error{partPath_.string() + ": could not be written in full"};
-  std::error_code ec;
-  std::filesystem::rename(partPath_, path_, ec);
-  if (ec)
-    return Error{partPath_.string() + ": cannot rename to " + path_.string() + ": " + ec.message()};
-  return Ok{};
+  return file_.commit();
 }
 
 }  // namespace dynahand::io

@@ -112,7 +112,12 @@ struct Segment {
   Vec3 armDirection = Vec3::Zero();
   Vec2 armDirectionImage = Vec2::Zero();  // the same in the image (pixels, unit)
   int cutPixelCount = 0;                  // connected samples just beyond the radius
-  int regionCount = 0;                    // 1, or 2 with secondRegionDepthBandM
+  // Region 1 is a limb attached to the body (it continues out of view, beyond two hand
+  // radii or into the sensor's near range): limbEnd is its free end (m), where the hand is,
+  // the surface point farthest along the surface from every attachment.
+  bool limbEndFound = false;
+  Vec3 limbEnd = Vec3::Zero();
+  int regionCount = 0;  // 1, or 2 with secondRegionDepthBandM
 };
 
 // The per-frame output. Reused across frames (buffers keep their capacity).

@@ -59,6 +59,14 @@ struct DetectorSettings {
   // disagreeFrames frames in a row, the detector-fit simulation's hand replaces the winner.
   float disagreeDistanceM = 0.035f;
   int disagreeFrames = 4;
+  // One hand whose segment is a limb attached to the body (CloudFrame::segment.limbEndFound):
+  // the crop of a hand not found last frame is centred on the mean of the hand's points
+  // within limbEndRadius x the model hand's length of the limb's free end, not on the
+  // segment's centroid (which lies on the forearm). 0 = off.
+  float limbEndRadius = 0.6f;
+  // ... and last frame's detection is the crop's centre only while its box centre lies
+  // within this distance (m) of that mean: farther, it was read from the forearm.
+  float limbEndCropDistanceM = 0.10f;
 };
 
 struct TrackerSettings {

@@ -349,6 +349,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   int stride = 1;
   int segmentFactor = 1;  // segmentation samples every segmentFactor working samples
   int regionCount = 0;
+  Vec3 handEnd = Vec3::Zero();
+  bool haveHandEnd = false;
   for (int round = 0; round < kCandidateRounds && !fineFound[0]; ++round) {
     // The coarse ball is wider than the hand radius: the full-resolution nearest point
     // (the final ball's centre) differs from the coarse one by up to a few cm, and the
@@ -394,8 +396,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
       regionCount = 1;
     }
     if (regionCount == 0) return Ok{};  // no hand: valid, empty
-    Vec3 handEnd = Vec3::Zero();
-    const bool haveHandEnd = findLimbEnd(coarse, firstSeed, first, handEnd);
+    haveHandEnd = findLimbEnd(coarse, firstSeed, first, handEnd);
     int minI = first.minI, maxI = first.maxI, minJ = first.minJ, maxJ = first.maxJ;
     if (seg.secondRegionDepthBandM > 0.0f) {
       attempts = 0;
@@ -729,6 +730,8 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   s.areaM2 = fineRegion[0].areaM2;
   if (fineFound[1]) s.areaM2 += fineRegion[1].areaM2;
   s.centroid = segmentedSum / static_cast<float>(segmentedSamples);
+  s.limbEndFound = haveHandEnd;
+  s.limbEnd = haveHandEnd ? handEnd : Vec3::Zero();
   const GrownRegion& hand = fineRegion[0];
   s.cutPixelCount = hand.cutCount;
   if (hand.cutCount > 0) {

@@ -25,6 +25,22 @@ bool liesOnPoints(const Vec3& p, const std::vector<Vec3>& points, float distance
   return false;
 }
 
+// The hand at a limb's free end: the mean of the points within radiusM of the end. False when
+// none lies there.
+bool handAtLimbEnd(const Vec3& end, const std::vector<Vec3>& points, float radiusM, Vec3& centre) {
+  const float limit = radiusM * radiusM;
+  Vec3 sum = Vec3::Zero();
+  int count = 0;
+  for (const Vec3& q : points) {
+    if ((q - end).squaredNorm() > limit) continue;
+    sum += q;
+    ++count;
+  }
+  if (count == 0) return false;
+  centre = sum / static_cast<float>(count);
+  return true;
+}
+
 }  // namespace
 
 const char* strategyName(StrategyKind kind) {
@@ -58,6 +74,7 @@ struct Tracker::Impl {
   std::unique_ptr<detect::KeypointDetector> keypointDetector;  // null: none
   detect::HandCrop crop;
   detect::DetectedKeypoints keypoints[2];
+  float handLength = 0.19f;               // the model hand's wrist-to-middle-tip length (m)
   std::unique_ptr<WorkerPool> pool;       // null with one thread
   std::unique_ptr<HandTracker> hands[2];  // [0] right, [1] left
   std::vector<Vec3> handPoints[2];
@@ -116,12 +133,15 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
   if (!(s.detector.maxOffCloudM > 0.0f)) return Error{"detector maxOffCloudM must be > 0 m"};
   if (!(s.detector.disagreeDistanceM > 0.0f) || s.detector.disagreeFrames < 1)
     return Error{"detector disagreeDistanceM must be > 0 m and disagreeFrames >= 1"};
+  if (!(s.detector.limbEndRadius >= 0.0f) || !(s.detector.limbEndCropDistanceM > 0.0f))
+    return Error{"detector limbEndRadius must be >= 0 and limbEndCropDistanceM > 0 m"};
   if (!keypointDetector) s.detector.enabled = false;
   const float length = rightHand.metadata().referenceLength;
   const float referenceLength = model::HandDimensions{}.length;
   if (s.scaleSegmentationToHand && length > referenceLength)
     s.cloud.segmentation.handRadiusM *= length / referenceLength;
   auto impl = std::make_unique<Impl>(rightHand, intrinsics, s);
+  impl->handLength = length;
   impl->keypointDetector = std::move(keypointDetector);
   auto right = HandTracker::create(impl->right, model::Side::Right, s, impl->pool.get());
   if (!right) return right.error();
@@ -208,10 +228,22 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       detect::DetectedKeypoints& k = m.keypoints[h];
       // The crop is centred on the hand where last frame's detection found it, while that
       // still lies on this hand's points: the network then sees the whole hand centred, as in
-      // most of its training crops. Otherwise it looks from the centroid first, then again
-      // centred on what it found there.
+      // most of its training crops. Otherwise it looks from the hand's estimated centre (or
+      // the centroid) first, then again centred on what it found there.
       Vec3 handCentre = k.valid ? detect::keypointBoxCentre(k.points) : Vec3::Zero();
-      const bool onHand = k.valid && liesOnPoints(handCentre, m.handPoints[h], kCropOnPointsM);
+      bool onHand = k.valid && liesOnPoints(handCentre, m.handPoints[h], kCropOnPointsM);
+      // One hand whose segment is a limb: the hand is at its free end. A crop centred there
+      // holds the hand, where the segment's centroid lies on the forearm (10-12 cm from the
+      // hand's centre for a head-mounted camera); last frame's detection far from it was read
+      // from the forearm.
+      Vec3 endCentre;
+      const DetectorSettings& ds = m.settings.detector;
+      if (handCount == 1 && ds.limbEndRadius > 0.0f && m.cloud.segment.limbEndFound &&
+          handAtLimbEnd(m.cloud.segment.limbEnd, m.handPoints[h], ds.limbEndRadius * m.handLength,
+                        endCentre)) {
+        centre = &endCentre;
+        if (onHand && (handCentre - endCentre).norm() > ds.limbEndCropDistanceM) onHand = false;
+      }
       const bool mirrored = h == 1;
       k.valid = false;
       if (onHand) {

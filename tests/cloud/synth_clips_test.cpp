@@ -133,7 +133,8 @@ TEST(CloudSynthClips, EveryClipStructuredLightFindsTheHand) {
 // The original authors' captured motion seen from a head-mounted camera: the forearm comes from
 // the image's bottom toward the camera, is often nearer than the hand and is cut off by the
 // sensor's near range inside the image. The segment must hold the hand (its palm), not only
-// the forearm around the nearest point.
+// the forearm around the nearest point, and the limb's free end must lie on the hand (the
+// tracker centres the detector's crop there).
 TEST(CloudSynthClips, AnimbankSeenFromTheHeadSegmentsTheHand) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
   synth::SynthOptions options;
@@ -148,7 +149,10 @@ TEST(CloudSynthClips, AnimbankSeenFromTheHeadSegmentsTheHand) {
   // The palm's centre this near (m) to a segmented point is on the segment (the skin is 1-2 cm
   // from it).
   constexpr float kReachM = 0.03f;
-  int frames = 0, onHand = 0;
+  // A limb end this near (m) to the centre of the keypoints' box is on the hand (a fingertip
+  // lies 8-10 cm from it).
+  constexpr float kEndOnHandM = 0.10f;
+  int frames = 0, onHand = 0, endFound = 0, endOnHand = 0;
   for (int i = 0; i < seq->frameCount(); i += 8, ++frames) {
     const synth::SyntheticFrame& frame = seq->frame(i);
     ASSERT_TRUE(pipeline.process(frame.depth, out).ok());
@@ -160,11 +164,27 @@ TEST(CloudSynthClips, AnimbankSeenFromTheHeadSegmentsTheHand) {
       return false;
     };
     onHand += out.segment.found && reached(palm);
+    if (out.segment.found && out.segment.limbEndFound) {
+      ++endFound;
+      Vec3 lo = kp[0], hi = kp[0];
+      for (const Vec3& p : kp) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      endOnHand += (out.segment.limbEnd - (lo + hi) * 0.5f).norm() < kEndOnHandM;
+    }
   }
 
   const double share = static_cast<double>(onHand) / frames;
-  std::printf("animbank head tof: palm segmented on %.1f%% of %d frames\n", 100.0 * share, frames);
+  const double endShare = static_cast<double>(endFound) / frames;
+  const double endOnHandShare = endFound > 0 ? static_cast<double>(endOnHand) / endFound : 0.0;
+  std::printf(
+      "animbank head tof: palm segmented on %.1f%% of %d frames; limb end found on %.1f%%, "
+      "on the hand on %.1f%% of those\n",
+      100.0 * share, frames, 100.0 * endShare, 100.0 * endOnHandShare);
   EXPECT_GE(share, 0.95);
+  EXPECT_GE(endShare, 0.95);
+  EXPECT_GE(endOnHandShare, 0.95);
 }
 
 }  // namespace

@@ -16,16 +16,17 @@
 namespace dynahand::track {
 namespace {
 
-// Mean 21-keypoint error (m) over frames [from, count) of the sequence, ground-truth start.
+// Mean 21-keypoint error (m) over frames [from, count) of the sequence played from frame
+// `first`, ground-truth start.
 double trackMeanError(synth::SyntheticSequence& seq, const TrackerSettings& settings, int from,
-                      int count) {
+                      int count, int first = 0) {
   auto tracker = Tracker::create(seq.model(0), seq.intrinsics(), settings);
   EXPECT_TRUE(tracker) << tracker.message();
   if (!tracker) return 1e9;
   double sum = 0.0;
   int n = 0;
   for (int f = 0; f < count; ++f) {
-    const synth::SyntheticFrame& frame = seq.frame(f);
+    const synth::SyntheticFrame& frame = seq.frame(first + f);
     if (f == 0) (*tracker)->initialize(frame.hands[0].pose);
     const TrackResult& r = (*tracker)->track(frame.depth);
     if (f < from) continue;
@@ -54,6 +55,30 @@ TEST(DetectorTracking, HandTurnedThroughEdgeOnIsRecovered) {
   const double withDetector = trackMeanError(*seq, TrackerSettings{}, 30, 38);
   EXPECT_GT(paperOnly, 0.035) << "the paper's simulations alone keep the flipped hand";
   EXPECT_LT(withDetector, 0.020) << "paper only " << paperOnly * 1000 << " mm";
+}
+
+// animbank.pose seen from a head-mounted camera, frames 1376-1465: a fist at the end of a
+// forearm that comes toward the camera; the segment holds 15-20 cm of forearm and its centroid
+// lies on it. A crop centred there shows the detector a forearm, which it reads as a flat hand
+// and the tracker follows; centred on the limb's free end, it shows the fist.
+TEST(DetectorTracking, HeadMountedCropIsCentredOnTheLimbsFreeEnd) {
+  DYNAHAND_REQUIRE_SHARED_DATA(data);
+  synth::SynthOptions o;
+  o.poseFile = data / "intel" / "animbank.pose";
+  o.frameCount = 2336;  // the whole file: its mean forearm placement is the camera's
+  o.profile = "tof";
+  o.scene.placement = synth::CameraPlacement::HeadMounted;
+  auto seq = synth::SyntheticSequence::create(o);
+  ASSERT_TRUE(seq) << seq.message();
+  TrackerSettings centroidCrop;
+  centroidCrop.detector.limbEndRadius = 0.0f;
+  const double fromCentroid = trackMeanError(*seq, centroidCrop, 0, 90, 1376);
+  const double fromLimbEnd = trackMeanError(*seq, TrackerSettings{}, 0, 90, 1376);
+  std::printf("centroid crop %.1f mm, limb-end crop %.1f mm\n", fromCentroid * 1000,
+              fromLimbEnd * 1000);
+  EXPECT_GT(fromCentroid, 0.080) << "the crop around the centroid sees the forearm";
+  EXPECT_LT(fromLimbEnd, 0.060);
+  EXPECT_LT(fromLimbEnd, 0.6 * fromCentroid);
 }
 
 TEST(DetectorTracking, WithoutTheDetectorNoDetectorSimulationRuns) {

@@ -73,7 +73,8 @@ def build_detector():
             super().__init__()
             self.down16 = nn.Sequential(conv(1, 16, 2), conv(16, 32, 2), conv(32, width))
             self.down8 = nn.Sequential(conv(width, 64, 2), conv(64, 64))
-            self.down4 = nn.Sequential(conv(64, 128, 2), conv(128, 128), conv(128, 128), conv(128, 128))
+            self.down4 = nn.Sequential(conv(64, 128, 2), conv(128, 128), conv(128, 128),
+                                       conv(128, 128))
             self.lift8 = conv(128, 64, kernel=1)
             self.up8 = conv(64, 64)
             self.lift16 = conv(64, width, kernel=1)

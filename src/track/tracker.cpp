@@ -74,7 +74,6 @@ struct Tracker::Impl {
   std::unique_ptr<detect::KeypointDetector> keypointDetector;  // null: none
   detect::HandCrop crop;
   detect::DetectedKeypoints keypoints[2];
-  float handLength = 0.19f;               // the model hand's wrist-to-middle-tip length (m)
   std::unique_ptr<WorkerPool> pool;       // null with one thread
   std::unique_ptr<HandTracker> hands[2];  // [0] right, [1] left
   std::vector<Vec3> handPoints[2];
@@ -141,7 +140,6 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
   if (s.scaleSegmentationToHand && length > referenceLength)
     s.cloud.segmentation.handRadiusM *= length / referenceLength;
   auto impl = std::make_unique<Impl>(rightHand, intrinsics, s);
-  impl->handLength = length;
   impl->keypointDetector = std::move(keypointDetector);
   auto right = HandTracker::create(impl->right, model::Side::Right, s, impl->pool.get());
   if (!right) return right.error();
@@ -233,13 +231,14 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       Vec3 handCentre = k.valid ? detect::keypointBoxCentre(k.points) : Vec3::Zero();
       bool onHand = k.valid && liesOnPoints(handCentre, m.handPoints[h], kCropOnPointsM);
       // One hand whose segment is a limb: the hand is at its free end. A crop centred there
-      // holds the hand, where the segment's centroid lies on the forearm (10-12 cm from the
-      // hand's centre for a head-mounted camera); last frame's detection far from it was read
-      // from the forearm.
+      // holds the hand, where the segment's centroid lies on the forearm (about 12 cm from
+      // the hand's centre for a head-mounted camera); last frame's detection far from it was
+      // read from the forearm.
       Vec3 endCentre;
       const DetectorSettings& ds = m.settings.detector;
+      const float handLength = m.right.metadata().referenceLength;  // wrist to middle tip, m
       if (handCount == 1 && ds.limbEndRadius > 0.0f && m.cloud.segment.limbEndFound &&
-          handAtLimbEnd(m.cloud.segment.limbEnd, m.handPoints[h], ds.limbEndRadius * m.handLength,
+          handAtLimbEnd(m.cloud.segment.limbEnd, m.handPoints[h], ds.limbEndRadius * handLength,
                         endCentre)) {
         centre = &endCentre;
         if (onHand && (handCentre - endCentre).norm() > ds.limbEndCropDistanceM) onHand = false;

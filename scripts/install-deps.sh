@@ -14,6 +14,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # scripts/test.sh checks the sources' formatting
+  doxygen                         # the API reference of include/dynahand (api_docs_doxygen test)
   libopenni2-dev libfreenect-dev
   libwebsocketpp-dev libasio-dev  # dynahand serve: WebSocket + HTTP server
   chromium                        # the viewer's browser test (driven by playwright-core)

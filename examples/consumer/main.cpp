@@ -1,7 +1,8 @@
-// Uses the installed dynahand package: composes two poses and hashes the result.
+// Uses the installed dynahand package through its umbrella header: composes two poses and
+// hashes the result.
 #include <cstdio>
 
-#include <dynahand/core.h>
+#include <dynahand/dynahand.h>
 
 int main() {
   using namespace dynahand;

@@ -1,7 +1,8 @@
-// Writing output files whole or not at all (docs/reliability.md, "How outputs are written"):
-// the bytes go to a temporary name in the same folder (PATH.part), which is renamed to PATH
-// only once everything was written and the file closed without error. A run that fails or dies
-// part-way never leaves a partial file under the final name.
+/// @file
+/// Writing output files whole or not at all (docs/reliability.md, "How outputs are written"):
+/// the bytes go to a temporary name in the same folder (PATH.part), which is renamed to PATH
+/// only once everything was written and the file closed without error. A run that fails or dies
+/// part-way never leaves a partial file under the final name.
 #pragma once
 
 #include <filesystem>
@@ -30,12 +31,12 @@ class AtomicFileWriter {
  public:
   /// Creates the folder if missing and opens PATH.part; an Error naming PATH.part if it cannot.
   Status open(const std::filesystem::path& path);
-  std::ostream& stream() { return out_; }
+  std::ostream& stream() { return out_; }  ///< the stream writing PATH.part
   /// Flushes; an Error naming PATH.part if a write failed (e.g. the disk is full).
   Status flush();
-  Status commit();  // once; later calls: Ok
-  const std::filesystem::path& path() const { return path_; }
-  const std::filesystem::path& part() const { return part_; }
+  Status commit();                                             ///< once; later calls: Ok
+  const std::filesystem::path& path() const { return path_; }  ///< PATH
+  const std::filesystem::path& part() const { return part_; }  ///< PATH.part
 
  private:
   std::filesystem::path path_;

@@ -54,7 +54,7 @@ struct CropFrame {
 
 /// One crop: the frame and kCropPixels^2 values in [-1, 1], row-major.
 struct HandCrop {
-  CropFrame frame;
+  CropFrame frame;            ///< where the crop lies in the image and in depth
   std::vector<float> pixels;  ///< (kCropPixels * kCropPixels)
 };
 
@@ -68,10 +68,10 @@ bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3*
 
 /// The detector's output for one crop.
 struct DetectedKeypoints {
-  bool valid = false;
-  std::array<Vec3, kKeypointCount> points{};       ///< m, camera frame
+  bool valid = false;                         ///< the network ran on a crop (false: no detection)
+  std::array<Vec3, kKeypointCount> points{};  ///< m, camera frame
   std::array<float, kKeypointCount> confidence{};  ///< [0, 1]: ~exp(-error / 20 mm)
-  float meanConfidence = 0.0f;
+  float meanConfidence = 0.0f;                     ///< the mean of `confidence`
 };
 
 /// The network and its buffers. One thread; no allocation per call once warm.
@@ -89,6 +89,7 @@ class KeypointDetector {
   /// The raw output for a crop: 63 normalised (u, v, d) values and 21 confidences.
   std::span<const float> run(std::span<const float> pixels);
 
+  /// The ONNX file the weights came from.
   const std::filesystem::path& file() const;
 
  private:

@@ -25,12 +25,13 @@ enum class DataSplit {
   HeldBack,  ///< only held-back clips (heldBackClips()) and hands in the held-back band
 };
 
+/// Which samples a data set holds and how they are made.
 struct DataOptions {
-  int count = 1000;        ///< samples
-  std::uint64_t seed = 1;  ///< sample i is a function of (seed, i) alone
-  DataSplit split = DataSplit::Train;
-  int threads = 1;                 ///< worker threads (the bytes do not depend on it)
-  float proportionSpread = 0.15f;  ///< per-bone / per-finger factors in [1 - s, 1 + s]
+  int count = 1000;                    ///< samples
+  std::uint64_t seed = 1;              ///< sample i is a function of (seed, i) alone
+  DataSplit split = DataSplit::Train;  ///< training or held-back poses and hands
+  int threads = 1;                     ///< worker threads (the bytes do not depend on it)
+  float proportionSpread = 0.15f;      ///< per-bone / per-finger factors in [1 - s, 1 + s]
 };
 
 /// Clips never used for training (the held-back motions).
@@ -40,8 +41,8 @@ std::pair<float, float> heldBackLengthBand();
 
 /// One sample: the crop and its 21 keypoints in normalised crop coordinates (u, v, d).
 struct DataSample {
-  std::vector<float> pixels;  ///< (kCropPixels^2) in [-1, 1]
-  std::array<Vec3, kKeypointCount> uvd{};
+  std::vector<float> pixels;               ///< (kCropPixels^2) in [-1, 1]
+  std::array<Vec3, kKeypointCount> uvd{};  ///< keypoints in crop coordinates (CropFrame::toCrop)
   std::array<Vec3, kKeypointCount> keypoints{};  ///< the same in the camera frame, m
   CropFrame frame;                               ///< where the crop lies
   int profile = 0;                               ///< index into synth::sensorProfiles()
@@ -51,13 +52,16 @@ struct DataSample {
 /// Makes sample `index` of a set (deterministic).
 DataSample makeSample(const DataOptions& options, int index);
 
+/// What evaluateDetector measured.
+struct DetectorFigures {
+  int samples = 0;           ///< samples evaluated
+  double meanMm = 0.0,       ///< mean keypoint error, mm
+      p95Mm = 0.0,           ///< 95th-percentile keypoint error, mm
+      meanConfidence = 0.0;  ///< mean of the detector's mean confidence per crop
+  double msPerCrop = 0.0;    ///< network time per crop, ms (one thread)
+};
 /// The detector on `count` samples of a set: mean and 95th-percentile keypoint error (mm,
 /// camera frame) and the mean confidence.
-struct DetectorFigures {
-  int samples = 0;
-  double meanMm = 0.0, p95Mm = 0.0, meanConfidence = 0.0;
-  double msPerCrop = 0.0;  ///< network time per crop, ms (one thread)
-};
 DetectorFigures evaluateDetector(KeypointDetector& detector, const DataOptions& options);
 
 /// A sample's crop pixel (in [-1, 1]) as the data file stores it: one byte, round((p + 1) 127.5).

@@ -1,23 +1,24 @@
-// Automatic hand-size estimate (beyond the paper): which size of the default hand
-// (model::makeDefaultHand) best explains the first second or so of a depth sequence.
-//
-// Measuring the hand in the data while tracking it with a model of the wrong size does not
-// work: the tracker bends a too-long finger and keeps the palm's samples within the model's
-// width, so such measures stay near the model's size. Instead, candidate models are each
-// tracked over the same frames from the same start and scored by how well they explain the
-// data both ways: the harmonic mean of the share of the hand's samples within 10 mm of the
-// model (low when the model is too small) and the share of the model's visible surface on
-// the segmented hand (low when it is too big) (FitQuality, tracker.h). The search:
-//   1. uniform scale of the default proportions, 0.80-1.20 in steps of 0.10, then the two
-//      half steps beside the best, and the peak of a parabola through the best three;
-//   2. width alone at that length (-7 %, 0, +7 %), parabola peak;
-//   3. length alone at that width (-8 %, 0, +8 %), parabola peak, scored only over the frames
-//      where the fingers are out straight: a too-long finger curls into a fist as well as
-//      the right one.
-// 13 candidate trackers; they run in parallel on `threads`. A length or width the caller
-// gives is kept: then step 1 scales the other alone and steps 2-3 are left out (7 trackers;
-// a length searched so scores every frame, fists included).
-// Measured figures: docs/tracker.md, "Hand size".
+/// @file
+/// Automatic hand-size estimate (beyond the paper): which size of the default hand
+/// (model::makeDefaultHand) best explains the first second or so of a depth sequence.
+///
+/// Measuring the hand in the data while tracking it with a model of the wrong size does not
+/// work: the tracker bends a too-long finger and keeps the palm's samples within the model's
+/// width, so such measures stay near the model's size. Instead, candidate models are each
+/// tracked over the same frames from the same start and scored by how well they explain the
+/// data both ways: the harmonic mean of the share of the hand's samples within 10 mm of the
+/// model (low when the model is too small) and the share of the model's visible surface on
+/// the segmented hand (low when it is too big) (FitQuality, tracker.h). The search:
+///   1. uniform scale of the default proportions, 0.80-1.20 in steps of 0.10, then the two
+///      half steps beside the best, and the peak of a parabola through the best three;
+///   2. width alone at that length (-7 %, 0, +7 %), parabola peak;
+///   3. length alone at that width (-8 %, 0, +8 %), parabola peak, scored only over the frames
+///      where the fingers are out straight: a too-long finger curls into a fist as well as
+///      the right one.
+/// 13 candidate trackers; they run in parallel on `threads`. A length or width the caller
+/// gives is kept: then step 1 scales the other alone and steps 2-3 are left out (7 trackers;
+/// a length searched so scores every frame, fists included).
+/// Measured figures: docs/tracker.md, "Hand size".
 #pragma once
 
 #include <optional>
@@ -29,31 +30,34 @@
 
 namespace dynahand::track {
 
+/// How estimateHandSize searches.
 struct HandSizeOptions {
-  TrackerSettings tracker;  // settings of the candidate trackers (candidates are not kept)
-  // Frames at the start each candidate leaves out of its score when it acquires the hand by
-  // itself (no start keypoints): acquisition may take a few frames, and a candidate that is
-  // slow to acquire is not a worse size. With start keypoints every frame counts.
+  TrackerSettings tracker;  ///< settings of the candidate trackers (candidates are not kept)
+  /// Frames at the start each candidate leaves out of its score when it acquires the hand by
+  /// itself (no start keypoints): acquisition may take a few frames, and a candidate that is
+  /// slow to acquire is not a worse size. With start keypoints every frame counts.
   int acquisitionFrames = 6;
-  int threads = 1;  // candidate trackers run in parallel; the result does not depend on it
-  std::optional<float> length;  // m: a known length, kept (only the width is estimated)
-  std::optional<float> width;   // m: a known width, kept (only the length is estimated)
+  int threads = 1;  ///< candidate trackers run in parallel; the result does not depend on it
+  std::optional<float> length;  ///< m: a known length, kept (only the width is estimated)
+  std::optional<float> width;   ///< m: a known width, kept (only the length is estimated)
 };
 
+/// The result of estimateHandSize.
 struct HandSizeEstimate {
-  model::HandDimensions dimensions;  // the estimate, m
-  int framesUsed = 0;                // frames each candidate tracked
-  int candidates = 0;                // candidate models tracked
-  // The best candidate's score: mean over the scored frames of the harmonic mean of
-  // FitQuality::dataNearModel and ::modelOnHand (0 in frames where it lost the hand), [0, 1].
-  // About 0.98-0.99 on clean synthetic data; low values mean the estimate is unreliable.
+  model::HandDimensions dimensions;  ///< the estimate, m
+  int framesUsed = 0;                ///< frames each candidate tracked
+  int candidates = 0;                ///< candidate models tracked
+  /// The best candidate's score: mean over the scored frames of the harmonic mean of
+  /// FitQuality::dataNearModel and FitQuality::modelOnHand (0 in frames where it lost the
+  /// hand), [0, 1]. About 0.98-0.99 on clean synthetic data; low values mean the estimate is
+  /// unreliable.
   float fitScore = 0.0f;
 };
 
-// Estimates the hand size from `frames` (the start of a sequence, e.g. 30 frames; without
-// start keypoints more than acquisitionFrames). start: the first frame's 21 keypoints (each
-// candidate is fitted to them under its joint limits), or none to let each candidate acquire the
-// hand by itself. Errors for bad intrinsics or too few frames.
+/// Estimates the hand size from `frames` (the start of a sequence, e.g. 30 frames; without
+/// start keypoints more than acquisitionFrames). start: the first frame's 21 keypoints (each
+/// candidate is fitted to them under its joint limits), or none to let each candidate acquire the
+/// hand by itself. Errors for bad intrinsics or too few frames.
 Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
                                           const Intrinsics& intrinsics,
                                           const std::optional<Keypoints21>& start,

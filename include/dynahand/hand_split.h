@@ -1,9 +1,10 @@
-// Two hands from one segmented cloud (paper: "Tracking of Multiple Hands"): k-means
-// with k = 2; the cluster on the user's left is the left hand; when the two clusters
-// are too close (or one is too small) they are merged into one cluster, tracked as
-// the right hand. A small stateful object: while two hands stay visible, k-means starts
-// from last frame's centroids and each cluster keeps its label, so hands keep their
-// identity when they cross.
+/// @file
+/// Two hands from one segmented cloud (paper: "Tracking of Multiple Hands"): k-means
+/// with k = 2; the cluster on the user's left is the left hand; when the two clusters
+/// are too close (or one is too small) they are merged into one cluster, tracked as
+/// the right hand. A small stateful object: while two hands stay visible, k-means starts
+/// from last frame's centroids and each cluster keeps its label, so hands keep their
+/// identity when they cross.
 #pragma once
 
 #include <array>
@@ -15,53 +16,60 @@
 
 namespace dynahand {
 
+/// Which of the user's hands; indexes HandSplit::hands.
 enum class Hand : std::uint8_t { kLeft = 0, kRight = 1 };
 
-// Which image side the user's left hand appears on when labelling fresh clusters.
+/// Which image side the user's left hand appears on when labelling fresh clusters.
 enum class CameraPlacement : std::uint8_t {
-  kFacingUser,  // camera looks at the user: their left hand has the larger camera x
-  kBehindUser,  // camera looks along the user's view (or a mirrored image): smaller x
+  kFacingUser,  ///< camera looks at the user: their left hand has the larger camera x
+  kBehindUser,  ///< camera looks along the user's view (or a mirrored image): smaller x
 };
 
+/// Settings of a HandSplitter.
 struct HandSplitConfig {
-  // Clusters whose centroids are closer than this (m) are one hand. Two hands held
-  // side by side have centroids >= ~0.12 m apart; halves of one hand plus a forearm
-  // stub are closer.
+  /// Clusters whose centroids are closer than this (m) are one hand. Two hands held
+  /// side by side have centroids >= ~0.12 m apart; halves of one hand plus a forearm
+  /// stub are closer.
   float mergeDistanceM = 0.12f;
-  int minPointsPerHand = 30;  // a smaller cluster is noise or a fingertip: merge
-  int maxIterations = 20;     // k-means (Lloyd) iterations; it stops earlier when stable
-  CameraPlacement placement = CameraPlacement::kFacingUser;
+  int minPointsPerHand = 30;  ///< a smaller cluster is noise or a fingertip: merge
+  int maxIterations = 20;     ///< k-means (Lloyd) iterations; it stops earlier when stable
+  CameraPlacement placement = CameraPlacement::kFacingUser;  ///< which side is the left hand
 };
 
+/// One hand's cluster of points.
 struct HandCluster {
-  bool present = false;
-  Vec3 centroid = Vec3::Zero();  // m, camera frame
-  int pointCount = 0;
+  bool present = false;          ///< the hand was found this frame
+  Vec3 centroid = Vec3::Zero();  ///< m, camera frame
+  int pointCount = 0;            ///< input points labelled with this hand
 };
 
+/// The result of HandSplitter::split for one frame.
 struct HandSplit {
-  int handCount = 0;                 // 0, 1 (merged: the right hand) or 2
-  std::array<HandCluster, 2> hands;  // indexed by Hand: [kLeft], [kRight]
-  std::vector<Hand> label;           // (pointCount): hand of each input point
+  int handCount = 0;                 ///< 0, 1 (merged: the right hand) or 2
+  std::array<HandCluster, 2> hands;  ///< indexed by Hand: [kLeft], [kRight]
+  std::vector<Hand> label;           ///< (pointCount): hand of each input point
 
+  /// The cluster of hand h.
   const HandCluster& operator[](Hand h) const { return hands[static_cast<std::size_t>(h)]; }
 };
 
+/// Splits each frame's points into up to two hands, keeping their identity across frames.
 class HandSplitter {
  public:
+  /// A splitter with these settings that remembers no clusters yet.
   explicit HandSplitter(const HandSplitConfig& config = {});
 
-  // Splits `points` (m, camera frame; e.g. the voxel cloud) into hands. Replaces `out`.
+  /// Splits `points` (m, camera frame; e.g. the voxel cloud) into hands. Replaces `out`.
   void split(std::span<const Vec3> points, HandSplit& out);
-  // Forgets last frame's clusters (next frame labels fresh clusters by side).
+  /// Forgets last frame's clusters (next frame labels fresh clusters by side).
   void reset() { hadTwoHands_ = false; }
 
-  const HandSplitConfig& config() const { return config_; }
+  const HandSplitConfig& config() const { return config_; }  ///< the settings
 
  private:
   HandSplitConfig config_;
   bool hadTwoHands_ = false;
-  std::array<Vec3, 2> previousCentroid_ = {Vec3::Zero(), Vec3::Zero()};  // [left, right]
+  std::array<Vec3, 2> previousCentroid_ = {Vec3::Zero(), Vec3::Zero()};  ///< [left, right]
 };
 
 }  // namespace dynahand

@@ -8,7 +8,8 @@
 /// The crop is defined here once, for training data and inference alike:
 ///  - centre c (camera frame, m), projected to pixel (cu, cv): on the hand, the centre of its
 ///    keypoints' bounding box (keypointBoxCentre) as the tracker last saw it; with nothing
-///    known yet, the segmented points' centroid;
+///    known yet, the hand at the limb's free end (limbEndHandCentre), else the segmented
+///    points' centroid;
 ///  - a square window of kCropSizeM metres at depth c.z, i.e. half-width r = fx * kCropSizeM /
 ///    (2 c.z) pixels, sampled kCropPixels x kCropPixels (nearest pixel);
 ///  - value per crop pixel: (z - c.z) / (kCropSizeM / 2) clamped to [-1, 1] where the pixel is
@@ -65,6 +66,13 @@ Vec3 keypointBoxCentre(const std::array<Vec3, kKeypointCount>& points);
 /// Fills `out` from a processed cloud frame (its mask, depth and segment centroid). `centre`
 /// overrides the centroid (m, camera frame) when given. False when nothing is segmented.
 bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3* centre = nullptr);
+
+/// Where a first crop is centred when the segment is a limb attached to the body
+/// (CloudFrame::segment.limbEndFound): the mean of `points` (m, camera frame) within radiusM of
+/// the limb's free end, which lies on the hand where the centroid lies on the forearm. False
+/// when the segment is not a limb or no point lies that near.
+bool limbEndHandCentre(const CloudFrame& cloud, std::span<const Vec3> points, float radiusM,
+                       Vec3& centre);
 
 /// The detector's output for one crop.
 struct DetectedKeypoints {

@@ -134,7 +134,6 @@ class ArticulatedModel {
   const std::vector<Body>& bodies() const { return bodies_; }            ///< bodies by index
   const std::vector<Joint>& joints() const { return joints_; }           ///< joints by index
   const std::vector<Keypoint>& keypoints() const { return keypoints_; }  ///< keypoints by index
-  const CollisionSpec& collisionSpec() const { return collision_; }      ///< filter as specified
   int bodyCount() const { return static_cast<int>(bodies_.size()); }     ///< number of bodies
   int jointCount() const { return static_cast<int>(joints_.size()); }    ///< number of joints
   int root() const { return root_; }  ///< index of the root body (no joint's child)

@@ -213,7 +213,6 @@ class World {
 
   BodyId addBody(const BodyDef& def);            ///< Adds a body; returns its id.
   int bodyCount() const;                         ///< number of bodies
-  BodyType bodyType(BodyId b) const;             ///< type the body was created with
   float mass(BodyId b) const;                    ///< kg (0 for static/kinematic)
   const ConvexShape& bodyShape(BodyId b) const;  ///< the body's shape
   Pose pose(BodyId b) const;                     ///< world pose of the body frame
@@ -261,12 +260,10 @@ class World {
   /// maxTorque (N m), closing the error over max(timeConstant, dt) seconds.
   void setBodyDrive(BodyId b, const Pose& target, float maxForce, float maxTorque,
                     float timeConstant = 0);
-  void clearBodyDrive(BodyId b);  ///< Turns the body's drive off.
 
   /// Keeps axisA (body frame of a) within maxAngle (rad) of axisB (body frame of b).
   ConeId addAngularCone(BodyId a, const Vec3& axisA, BodyId b, const Vec3& axisB, float maxAngle);
   void setConeEnabled(ConeId c, bool enabled);  ///< Turns a cone on or off.
-  int coneCount() const;                        ///< number of cones
 
   /// Freezes bodies into one rigid group (momentum preserved); a body already welded is first
   /// released from its group. Rows on members act on the group. Returns the group id.

@@ -159,7 +159,6 @@ class Playground {
   const model::ModelPose& handTarget() const;
   /// The virtual hand's body poses (model layout; the forearm follows its target).
   model::ModelPose handPose() const;
-  physics::BodyId palmBody() const;             ///< the virtual hand's palm body
   bool isHandBody(physics::BodyId body) const;  ///< whether a world body is part of the hand
   /// The current angle (rad about its axis) of the lever or dial named `object`; nullopt
   /// when there is no such hinged object.

@@ -78,7 +78,6 @@ class VoxelGrid {
 
   int voxelCount() const { return voxelCount_; }        ///< occupied voxels since clear()
   int droppedPoints() const { return droppedPoints_; }  ///< points dropped since clear()
-  float voxelSize() const { return voxelSize_; }        ///< voxel edge, m
   int maxVoxels() const { return maxVoxels_; }          ///< voxel capacity per frame
 
   /// Centroid (m) of voxel i in first-hit order, 0 <= i < voxelCount().

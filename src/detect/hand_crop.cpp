@@ -67,4 +67,21 @@ bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3*
   return true;
 }
 
+bool limbEndHandCentre(const CloudFrame& cloud, std::span<const Vec3> points, float radiusM,
+                       Vec3& centre) {
+  if (!cloud.segment.limbEndFound) return false;
+  const Vec3& end = cloud.segment.limbEnd;
+  const float limit = radiusM * radiusM;
+  Vec3 sum = Vec3::Zero();
+  int count = 0;
+  for (const Vec3& q : points) {
+    if ((q - end).squaredNorm() > limit) continue;
+    sum += q;
+    ++count;
+  }
+  if (count == 0) return false;
+  centre = sum / static_cast<float>(count);
+  return true;
+}
+
 }  // namespace dynahand::detect

@@ -23,10 +23,20 @@ namespace {
 constexpr float kForearmPerLength = 1.4f;  // as the synthesiser: elbow beyond the image
 // Cosine of the least angle between the forearm (toward the elbow) and the line of sight.
 constexpr float kArmTowardCameraCos = 0.9f;
+// Share of samples seen as from a head-mounted camera: the forearm comes toward the camera,
+// its cosine to the line of sight at least kHeadViewCos (most head-mounted frames lie there;
+// a uniform rotation puts a quarter of the samples there).
+constexpr float kHeadViewShare = 0.45f;
+constexpr float kHeadViewCos = 0.3f;
 // Share of crops centred on the hand (its keypoint box centre, off by kCentreNoiseM per axis,
 // at most kCentreNoiseLimitM), as the tracker centres them once it has seen the hand; the rest
-// are centred on the segment centroid, as on a first frame.
+// are centred as on a first frame: near the limb's free end, else on the segment centroid.
 constexpr float kHandCentredShare = 0.75f;
+// First-frame crops at a limb's end: the points within this many hand lengths (wrist to middle
+// tip) of it, as the tracker's DetectorSettings::limbEndRadius.
+constexpr float kLimbEndRadius = 0.6f;
+// A first-frame crop centre farther than this (m) from the palm's centre is on another object.
+constexpr float kFirstCentreLimitM = 0.12f;
 constexpr float kCentreNoiseM = 0.012f;
 constexpr float kCentreNoiseLimitM = 0.035f;
 constexpr float kReferenceWidth = 0.085f;  // SurfaceRadii are for this palm width
@@ -231,12 +241,14 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
   const Vec3 target = k.deproject(u, v, z);
   // Any orientation whose forearm does not point straight at the camera: within 25 degrees of
   // it the arm would hide the hand. Forearms coming toward the camera (a head-mounted view, the
-  // back of the hand seen over the arm) are included.
+  // back of the hand seen over the arm) are included, and drawn more often than uniformly.
+  const float leastToward = chance(rng, kHeadViewShare) ? kHeadViewCos : -1.0f;
   Quat rotation;
   for (int tries = 0;; ++tries) {
     rotation = randomRotation(rng);
     const Vec3 arm = rotation * Vec3(0.0f, 0.0f, -1.0f);  // palm frame: forearm along -z
-    if (arm.dot(-target.normalized()) < kArmTowardCameraCos || tries > 20) break;
+    const float toward = arm.dot(-target.normalized());
+    if ((toward < kArmTowardCameraCos && toward >= leastToward) || tries > 40) break;
   }
   int source = 0;
   float scale = 1.0f;
@@ -309,12 +321,19 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
       mine += labels[i] == synth::PixelLabel::Hand0 ? 1 : 0;
     }
   if (all == 0 || static_cast<float>(mine) < 0.7f * static_cast<float>(all)) return false;
-  if ((pc.cloud.segment.centroid - target).norm() > 0.12f) return false;
+  // Where the tracker centres its first crop. For a forearm coming toward the camera the
+  // centroid lies on the forearm, the limb's end on the hand.
+  const auto& kp = hand.keypoints;
+  const float handLength = (kp[9] - kp[0]).norm() + (kp[10] - kp[9]).norm() +
+                           (kp[11] - kp[10]).norm() + (kp[12] - kp[11]).norm();
+  Vec3 firstCentre = pc.cloud.segment.centroid;
+  limbEndHandCentre(pc.cloud, pc.cloud.points, kLimbEndRadius * handLength, firstCentre);
+  if ((firstCentre - target).norm() > kFirstCentreLimitM) return false;
   Vec3 centre = keypointBoxCentre(hand.keypoints);
   const bool handCentred = chance(rng, kHandCentredShare);
   for (int axis = 0; axis < 3; ++axis)
     centre[axis] += std::clamp(normal(rng, kCentreNoiseM), -kCentreNoiseLimitM, kCentreNoiseLimitM);
-  if (!makeCrop(pc.cloud, false, w.crop, handCentred ? &centre : nullptr)) return false;
+  if (!makeCrop(pc.cloud, false, w.crop, handCentred ? &centre : &firstCentre)) return false;
   for (std::size_t i = 0; i < out.uvd.size(); ++i) {
     out.uvd[i] = w.crop.frame.toCrop(k, hand.keypoints[i]);
     if (out.uvd[i].head<2>().cwiseAbs().maxCoeff() > 1.3f) return false;

@@ -85,9 +85,6 @@ BodyId World::addBody(const BodyDef& def) {
 int World::bodyCount() const {
   return static_cast<int>(impl_->bodies.size());
 }
-BodyType World::bodyType(BodyId b) const {
-  return impl_->bodies[static_cast<std::size_t>(b)].type;
-}
 float World::mass(BodyId b) const {
   return impl_->bodies[static_cast<std::size_t>(b)].mass;
 }
@@ -259,10 +256,6 @@ void World::setBodyDrive(BodyId b, const Pose& target, float maxForce, float max
   c.driveTimeConstant = timeConstant;
 }
 
-void World::clearBodyDrive(BodyId b) {
-  impl_->bodies[static_cast<std::size_t>(b)].driveEnabled = false;
-}
-
 ConeId World::addAngularCone(BodyId a, const Vec3& axisA, BodyId b, const Vec3& axisB,
                              float maxAngle) {
   assert(a != b && axisA.norm() > 0.0f && axisB.norm() > 0.0f && maxAngle >= 0.0f);
@@ -272,9 +265,6 @@ ConeId World::addAngularCone(BodyId a, const Vec3& axisA, BodyId b, const Vec3& 
 
 void World::setConeEnabled(ConeId c, bool enabled) {
   impl_->cones[static_cast<std::size_t>(c)].enabled = enabled;
-}
-int World::coneCount() const {
-  return static_cast<int>(impl_->cones.size());
 }
 
 GroupId World::weld(std::span<const BodyId> members) {

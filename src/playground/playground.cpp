@@ -357,10 +357,6 @@ model::ModelPose Playground::handPose() const {
   return out;
 }
 
-physics::BodyId Playground::palmBody() const {
-  return impl_->handBodies[static_cast<std::size_t>(impl_->palm)];
-}
-
 bool Playground::isHandBody(physics::BodyId body) const {
   return impl_->handFlag[static_cast<std::size_t>(body)] != 0;
 }

@@ -25,22 +25,6 @@ bool liesOnPoints(const Vec3& p, const std::vector<Vec3>& points, float distance
   return false;
 }
 
-// The hand at a limb's free end: the mean of the points within radiusM of the end. False when
-// none lies there.
-bool handAtLimbEnd(const Vec3& end, const std::vector<Vec3>& points, float radiusM, Vec3& centre) {
-  const float limit = radiusM * radiusM;
-  Vec3 sum = Vec3::Zero();
-  int count = 0;
-  for (const Vec3& q : points) {
-    if ((q - end).squaredNorm() > limit) continue;
-    sum += q;
-    ++count;
-  }
-  if (count == 0) return false;
-  centre = sum / static_cast<float>(count);
-  return true;
-}
-
 }  // namespace
 
 const char* strategyName(StrategyKind kind) {
@@ -237,9 +221,9 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       Vec3 endCentre;
       const DetectorSettings& ds = m.settings.detector;
       const float handLength = m.right.metadata().referenceLength;  // wrist to middle tip, m
-      if (handCount == 1 && ds.limbEndRadius > 0.0f && m.cloud.segment.limbEndFound &&
-          handAtLimbEnd(m.cloud.segment.limbEnd, m.handPoints[h], ds.limbEndRadius * handLength,
-                        endCentre)) {
+      if (handCount == 1 && ds.limbEndRadius > 0.0f &&
+          detect::limbEndHandCentre(m.cloud, m.handPoints[h], ds.limbEndRadius * handLength,
+                                    endCentre)) {
         centre = &endCentre;
         if (onHand && (handCentre - endCentre).norm() > ds.limbEndCropDistanceM) onHand = false;
       }

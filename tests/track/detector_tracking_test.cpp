@@ -76,8 +76,8 @@ TEST(DetectorTracking, HeadMountedCropIsCentredOnTheLimbsFreeEnd) {
   const double fromLimbEnd = trackMeanError(*seq, TrackerSettings{}, 0, 90, 1376);
   std::printf("centroid crop %.1f mm, limb-end crop %.1f mm\n", fromCentroid * 1000,
               fromLimbEnd * 1000);
-  EXPECT_GT(fromCentroid, 0.080) << "the crop around the centroid sees the forearm";
-  EXPECT_LT(fromLimbEnd, 0.060);
+  EXPECT_GT(fromCentroid, 0.065) << "the crop around the centroid sees the forearm";
+  EXPECT_LT(fromLimbEnd, 0.050);
   EXPECT_LT(fromLimbEnd, 0.6 * fromCentroid);
 }
 

@@ -7,9 +7,10 @@
 ///
 /// The crop is defined here once, for training data and inference alike:
 ///  - centre c (camera frame, m), projected to pixel (cu, cv): on the hand, the centre of its
-///    keypoints' bounding box (keypointBoxCentre) as the tracker last saw it; with nothing
-///    known yet, the hand at the limb's free end (limbEndHandCentre), else the segmented
-///    points' centroid;
+///    keypoints' bounding box (keypointBoxCentre) as the tracker last saw it; otherwise (a
+///    first frame, or last frame's detection far from the limb's end) the hand at the limb's
+///    free end (limbEndHandCentre), else the segmented points' centroid (with two hands, the
+///    hand's cluster centroid);
 ///  - a square window of kCropSizeM metres at depth c.z, i.e. half-width r = fx * kCropSizeM /
 ///    (2 c.z) pixels, sampled kCropPixels x kCropPixels (nearest pixel);
 ///  - value per crop pixel: (z - c.z) / (kCropSizeM / 2) clamped to [-1, 1] where the pixel is
@@ -69,8 +70,8 @@ bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3*
 
 /// Where a first crop is centred when the segment is a limb attached to the body
 /// (CloudFrame::segment.limbEndFound): the mean of `points` (m, camera frame) within radiusM of
-/// the limb's free end, which lies on the hand where the centroid lies on the forearm. False
-/// when the segment is not a limb or no point lies that near.
+/// the limb's free end, which lies on the hand where the centroid lies on the forearm. False,
+/// `centre` untouched, when the segment is not a limb or no point lies that near.
 bool limbEndHandCentre(const CloudFrame& cloud, std::span<const Vec3> points, float radiusM,
                        Vec3& centre);
 

@@ -58,8 +58,8 @@ struct WorldSettings {
   float contactHertz = 0.0f;
   float contactDampingRatio = 10.0f;  ///< damping ratio of the contactHertz spring
   int contactInnerIterations = 4;   ///< passes over one contact manifold per sweep (load spreading)
-  float limitErp = 0.5f;            ///< same for angular-limit violation
-  float surfaceErp = 0.5f;          ///< same for the tracker's surface/boundary rows
+  float limitErp = 0.5f;            ///< fraction of angular-limit violation removed per step
+  float surfaceErp = 0.5f;          ///< fraction of a surface/boundary row's gap removed per step
   float linearSlop = 1e-4f;         ///< m of penetration left uncorrected (prevents jitter)
   float maxCorrectionSpeed = 2.0f;  ///< m/s cap on contact push-out velocity
   float contactMargin = 2e-3f;      ///< m; pairs closer than this get speculative contacts
@@ -181,7 +181,7 @@ struct WorldState {
         tangentImpulse2;  ///< same along the second friction direction, N s
   };
   std::vector<CachedContact> contacts;  ///< sorted by pair
-  std::uint64_t stepCount = 0;          ///< steps taken since the world was created
+  std::uint64_t stepCount = 0;  ///< steps taken (part of the state: restoreState rewinds it)
 };
 
 /// Read-only view of one of the last step's contacts.
@@ -260,6 +260,7 @@ class World {
   /// maxTorque (N m), closing the error over max(timeConstant, dt) seconds.
   void setBodyDrive(BodyId b, const Pose& target, float maxForce, float maxTorque,
                     float timeConstant = 0);
+  void clearBodyDrive(BodyId b);  ///< Turns the body's drive off.
 
   /// Keeps axisA (body frame of a) within maxAngle (rad) of axisB (body frame of b).
   ConeId addAngularCone(BodyId a, const Vec3& axisA, BodyId b, const Vec3& axisB, float maxAngle);

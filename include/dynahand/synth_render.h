@@ -75,9 +75,9 @@ struct HandProportions {
                                                      {1.0f, 1.0f, 1.0f, 1.0f},
                                                      {1.0f, 1.0f, 1.0f, 1.0f},
                                                      {1.0f, 1.0f, 1.0f, 1.0f}}};
-  /// render radii of each finger, 1 by default
+  /// factor on each finger's render radii, 1 by default
   std::array<float, 5> fingerThickness = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
-  /// render half-thickness of the palm, 1 by default
+  /// factor on the palm's render half-thickness, 1 by default
   float palmThickness = 1.0f;
 
   /// Every factor exactly 1.

@@ -234,6 +234,10 @@ void World::setJointDrive(JointId j, const Quat& targetRelative, float maxTorque
   c.driveTimeConstant = timeConstant;
 }
 
+void World::clearBodyDrive(BodyId b) {
+  impl_->bodies[static_cast<std::size_t>(b)].driveEnabled = false;
+}
+
 void World::setJointDriveSpring(JointId j, float stiffness, float dampingRatio) {
   assert(stiffness >= 0.0f && dampingRatio >= 0.0f);
   JointConfig& c = impl_->joints[static_cast<std::size_t>(j)];

@@ -99,8 +99,8 @@ TEST(DetectorData, SamplesAreDeterministicAndLabelledInsideTheCrop) {
 }
 
 // A head-mounted camera sees the forearm come toward it in nine frames of ten of animbank.pose
-// (the forearm's direction at least 0.3 in cosine toward the camera); a uniform rotation puts
-// a quarter of the samples there, the generator nearly half.
+// (the wrist-to-knuckle line at least 0.3 in cosine toward the camera); uniform rotations put
+// 23 % of the samples there, the generator nearly half.
 TEST(DetectorData, NearlyHalfTheSamplesSeeTheForearmComeTowardTheCamera) {
   DataOptions o;
   o.seed = 11;

@@ -81,6 +81,10 @@ void keypointPositionsInto(const ArticulatedModel& model, const ModelPose& pose,
 /// PIP, DIP, TIP; 9-12 middle; 13-16 ring; 17-20 pinky. Requires model.hasKeypoints21().
 std::array<Vec3, 21> keypoints21(const ArticulatedModel& model, const ModelPose& pose);
 
+/// The hand's length (m) from its 21 keypoints: the middle finger's chain wrist -> MCP -> PIP
+/// -> DIP -> tip straightened out, as ModelMetadata::referenceLength measures it.
+float handLength(const std::array<Vec3, 21>& keypoints);
+
 /// The MediaPipe names, in order ("wrist", "thumb_cmc", ..., "pinky_tip").
 const std::array<const char*, 21>& keypoint21Names();
 

@@ -325,11 +325,9 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
   if (all == 0 || static_cast<float>(mine) < 0.7f * static_cast<float>(all)) return false;
   // Where the tracker centres its first crop. For a forearm coming toward the camera the
   // centroid lies on the forearm, the limb's end on the hand.
-  const auto& kp = hand.keypoints;
-  const float handLength = (kp[9] - kp[0]).norm() + (kp[10] - kp[9]).norm() +
-                           (kp[11] - kp[10]).norm() + (kp[12] - kp[11]).norm();
   Vec3 firstCentre = pc.cloud.segment.centroid;
-  limbEndHandCentre(pc.cloud, pc.cloud.points, kLimbEndRadius * handLength, firstCentre);
+  limbEndHandCentre(pc.cloud, pc.cloud.points, kLimbEndRadius * model::handLength(hand.keypoints),
+                    firstCentre);
   if ((firstCentre - target).norm() > kFirstCentreLimitM) return false;
   Vec3 centre = keypointBoxCentre(hand.keypoints);
   const bool handCentred = chance(rng, kHandCentredShare);

@@ -242,8 +242,7 @@ Result<IntelModel> importIntelModel(const std::filesystem::path& path,
     const auto kp = keypoints21(*model, *rest);
     ModelSpec spec = model->spec();
     // Length of the straightened middle finger chain (the rest pose is slightly flexed).
-    spec.metadata.referenceLength = (kp[9] - kp[0]).norm() + (kp[10] - kp[9]).norm() +
-                                    (kp[11] - kp[10]).norm() + (kp[12] - kp[11]).norm();
+    spec.metadata.referenceLength = handLength(kp);
     model = buildModel(spec);
     if (!model) return Error{fmt::format("{}: {}", path.string(), model.message())};
   }

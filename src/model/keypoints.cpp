@@ -135,6 +135,11 @@ void keypointPositionsInto(const ArticulatedModel& model, const ModelPose& pose,
   }
 }
 
+float handLength(const std::array<Vec3, 21>& kp) {
+  return (kp[9] - kp[0]).norm() + (kp[10] - kp[9]).norm() + (kp[11] - kp[10]).norm() +
+         (kp[12] - kp[11]).norm();
+}
+
 std::array<Vec3, 21> keypoints21(const ArticulatedModel& model, const ModelPose& pose) {
   assert(model.hasKeypoints21() && "the model lacks the 21 MediaPipe keypoint names");
   assert(pose.bodies.size() == model.bodies().size());

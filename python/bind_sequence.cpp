@@ -97,6 +97,9 @@ void bindSequence(py::module_& m) {
           "fps", [](const PySequence& s) { return s.info().framesPerSecond; },
           "Frames per second (frame i is at i / fps s).")
       .def_property_readonly(
+          "min_range_m", [](const PySequence& s) { return s.info().minRangeM; },
+          "The camera's near range, m (nothing nearer is measured); 0 = not recorded.")
+      .def_property_readonly(
           "depth_scale", [](const PySequence& s) { return s.info().depthScale; },
           "Metres per stored depth unit.")
       .def_property_readonly(
@@ -120,6 +123,7 @@ void bindSequence(py::module_& m) {
             d["cy"] = i.intrinsics.cy;
             d["fps"] = i.framesPerSecond;
             d["depth_scale"] = i.depthScale;
+            d["min_range_m"] = i.minRangeM;
             d["frames"] = i.frameCount;
             d["has_ground_truth"] = i.hasGroundTruth;
             d["format"] = i.format;

@@ -24,6 +24,7 @@ class PySynthClip {
   int handCount() const { return seq_.handCount(); }
   const Intrinsics& intrinsics() const { return seq_.intrinsics(); }
   const synth::SynthOptions& options() const { return seq_.options(); }
+  const synth::SensorProfile& profile() const { return seq_.profile(); }
 
   py::tuple frame(py::ssize_t index) {
     const int i = checkedIndex(index, size());
@@ -151,6 +152,9 @@ void bindSynth(py::module_& m) {
       .def_property_readonly(
           "profile", [](const PySynthClip& s) { return s.options().profile; },
           "The sensor profile.")
+      .def_property_readonly(
+          "min_range_m", [](const PySynthClip& s) { return s.profile().minRange; },
+          "The sensor profile's near range, m (nothing nearer is measured).")
       .def("__repr__", [](const PySynthClip& s) {
         return "SyntheticClip(motion='" + s.options().clip + "', profile='" + s.options().profile +
                "', frames=" + std::to_string(s.size()) + ")";

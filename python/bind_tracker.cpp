@@ -282,6 +282,8 @@ class PyTracker {
     settings.hands = hands;
     settings.threads = threads;
     settings.perFrame = perFrame;
+    if (spec.minRangeM && *spec.minRangeM > 0.0f)
+      settings.cloud.segmentation.sensorMinRangeM = *spec.minRangeM;
     if (py::isinstance<py::bool_>(detector)) {
       settings.detector.enabled = detector.cast<bool>();
     } else {
@@ -491,8 +493,9 @@ void bindTracker(py::module_& m) {
            py::arg("detector") = true, py::arg("threads") = 1, py::arg("per_frame") = false,
            py::arg("fps") = py::none(), py::arg("model_file") = py::none(),
            py::arg("frames") = py::none(), py::arg("hand_size_frames") = kDefaultSizeFrames,
-           "camera: a Camera, a dict (width, height, fx, fy, cx, cy[, fps]) or a Sequence / "
-           "SyntheticClip (its camera and fps).\n"
+           "camera: a Camera, a dict (width, height, fx, fy, cx, cy[, fps][, min_range_m]) or a "
+           "Sequence / SyntheticClip (its camera, fps and near range: min_range_m, m, tells the "
+           "segmentation where the sensor cuts off an arm reaching past it).\n"
            "hands: 1 or 2. hand_size: None (0.19, 0.085) or (length, width) of the built-in hand, "
            "m; a HandSize (estimate_hand_size()); or 'auto': estimated as `dynahand track "
            "--hand-size auto` does, from the first hand_size_frames (10..600, default 30) "

@@ -199,6 +199,9 @@ class Sequence:
     @property
     def depth_scale(self) -> float: ...
     @property
+    def min_range_m(self) -> float:
+        """The camera's near range, m (nothing nearer is measured); 0 = not recorded."""
+    @property
     def format(self) -> str: ...
     @property
     def has_ground_truth(self) -> bool: ...
@@ -237,6 +240,9 @@ class SyntheticClip:
     def motion(self) -> str: ...
     @property
     def profile(self) -> str: ...
+    @property
+    def min_range_m(self) -> float:
+        """The sensor profile's near range, m (nothing nearer is measured)."""
 
 def synth(
     motion: str = "wave",

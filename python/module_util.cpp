@@ -129,12 +129,15 @@ CameraSpec cameraSpec(const py::handle& obj) {
       spec.intrinsics.cx = d["cx"].cast<float>();
       spec.intrinsics.cy = d["cy"].cast<float>();
       if (d.contains("fps")) spec.fps = d["fps"].cast<double>();
+      if (d.contains("min_range_m")) spec.minRangeM = d["min_range_m"].cast<float>();
     } catch (const py::cast_error&) {
-      throw py::value_error("camera dict: width and height must be ints, fx fy cx cy numbers");
+      throw py::value_error(
+          "camera dict: width and height must be ints, fx fy cx cy (fps, min_range_m) numbers");
     }
   } else if (py::hasattr(obj, "camera")) {
     spec = cameraSpec(obj.attr("camera"));
     if (py::hasattr(obj, "fps")) spec.fps = obj.attr("fps").cast<double>();
+    if (py::hasattr(obj, "min_range_m")) spec.minRangeM = obj.attr("min_range_m").cast<float>();
   } else {
     throw py::value_error(
         "camera must be a dynahand.Camera, a dict with width, height, fx, fy, cx, cy, or a "
@@ -142,6 +145,8 @@ CameraSpec cameraSpec(const py::handle& obj) {
         typeName(obj) + ")");
   }
   checkedIntrinsics(spec.intrinsics);
+  if (spec.minRangeM && !(*spec.minRangeM >= 0.0f && *spec.minRangeM <= 100.0f))
+    throw py::value_error("camera: min_range_m must be in [0, 100] m");
   return spec;
 }
 

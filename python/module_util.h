@@ -67,10 +67,11 @@ Intrinsics checkedIntrinsics(const Intrinsics& k);
 struct CameraSpec {
   Intrinsics intrinsics;
   std::optional<double> fps;
+  std::optional<float> minRangeM;  // the camera's near range, m
 };
 
-// A Camera, a dict {width, height, fx, fy, cx, cy[, fps]}, or anything with a `camera`
-// attribute (a Sequence, a SyntheticClip) and maybe `fps`.
+// A Camera, a dict {width, height, fx, fy, cx, cy[, fps][, min_range_m]}, or anything with a
+// `camera` attribute (a Sequence, a SyntheticClip) and maybe `fps` and `min_range_m`.
 CameraSpec cameraSpec(const py::handle& obj);
 
 // ---- frames --------------------------------------------------------------------------------

@@ -106,6 +106,7 @@ int runTrack(const TrackOptions& o) {
   settings.keepCandidates = o.candidates;
   settings.detector.enabled = !o.noDetector;
   settings.detector.weights = o.detector;
+  if (info.minRangeM > 0.0f) settings.cloud.segmentation.sensorMinRangeM = info.minRangeM;
   if (o.noDetector && !o.detector.empty())
     throw UsageError("--detector and --no-detector are exclusive");
   for (const auto& name : o.disable) {

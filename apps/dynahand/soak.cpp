@@ -230,6 +230,7 @@ class TrackInput {
       }
       if (in.clips.empty()) return Error{"--soak-input synth: names no clip"};
       in.intrinsics = in.clips.front().intrinsics();
+      in.minRangeM = in.clips.front().profile().minRange;
       in.hands = in.clips.front().handCount();
       return in;
     }
@@ -239,6 +240,7 @@ class TrackInput {
     if (reader->frameCount() <= 0) return Error{"--soak-input " + o.input + ": holds no frames"};
     in.reader.emplace(std::move(*reader));
     in.intrinsics = in.reader->info().intrinsics;
+    in.minRangeM = in.reader->info().minRangeM;
     return in;
   }
 
@@ -261,6 +263,7 @@ class TrackInput {
   std::vector<synth::SyntheticSequence> clips;
   std::optional<SequenceReader> reader;
   Intrinsics intrinsics;
+  float minRangeM = 0.0f;  // the camera's near range (m); 0 = not known
   int hands = 1;
 
  private:
@@ -278,6 +281,7 @@ Result<SoakReport> runTrackSoak(const SoakOptions& o) {
   settings.hands = in->hands;
   settings.threads = 1;
   settings.detector.enabled = o.detector;
+  if (in->minRangeM > 0.0f) settings.cloud.segmentation.sensorMinRangeM = in->minRangeM;
   auto tracker = track::Tracker::create(model::makeDefaultHand(), in->intrinsics, settings);
   if (!tracker) return tracker.error();
 

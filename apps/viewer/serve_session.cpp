@@ -103,6 +103,7 @@ Result<std::unique_ptr<ServeSession>> ServeSession::open(const ServeOptions& o) 
     s.hasTruth = true;
     s.hand = s.synthetic->model(0);
     settings.hands = s.synthetic->handCount();
+    settings.cloud.segmentation.sensorMinRangeM = s.synthetic->profile().minRange;
   } else if (o.input == "camera" || o.input.rfind("camera:", 0) == 0) {
     const std::string spec = o.input.size() > 7 ? o.input.substr(7) : "";
     auto cam = DepthCamera::open(spec);
@@ -122,6 +123,7 @@ Result<std::unique_ptr<ServeSession>> ServeSession::open(const ServeOptions& o) 
     s.frameCount = info.frameCount;
     s.hasTruth = info.hasGroundTruth;
     s.hand = model::makeDefaultHand(dims);
+    if (info.minRangeM > 0.0f) settings.cloud.segmentation.sensorMinRangeM = info.minRangeM;
   }
   if (o.init != "auto" && o.init != "gt") return Error{"--init: expected auto or gt"};
   if (o.init == "gt" && !s.hasTruth) return Error{"--init gt: " + o.input + " has no ground truth"};

@@ -74,6 +74,11 @@ struct SegmentationConfig {
   /// Two-hand use: also take the next nearest region when its nearest point is within
   /// this depth (m) behind the first one's. 0 = one region only.
   float secondRegionDepthBandM = 0.0f;
+  /// The camera's near range (m): nothing nearer is measured. A limb whose nearest point lies
+  /// nearer than max(0.30, sensorMinRangeM + 0.05) m and that runs into missing data there while
+  /// coming nearer is taken as cut off by the sensor (an arm reaching past a head-mounted
+  /// camera) and so attached to the body at that end; the hand is at its other end.
+  float sensorMinRangeM = 0.20f;
 };
 
 /// Everything a CloudPipeline is configured with (docs/cloud.md).

@@ -44,8 +44,11 @@ struct SequenceInfo {
   int frameCount = 0;             ///< frames in the recording
   bool hasGroundTruth = false;    ///< groundtruth.jsonl present (canonical layout only)
   float framesPerSecond = 30.0f;  ///< frame i has timestamp i / framesPerSecond, s
-  std::string format;             ///< "canonical", "intel-rs", "nyu-png", "png16", "oni"
-  std::filesystem::path path;     ///< what was opened
+  /// The camera's near range (m): nothing nearer is measured (camera.json "min_range_m");
+  /// 0 = not recorded.
+  float minRangeM = 0.0f;
+  std::string format;          ///< "canonical", "intel-rs", "nyu-png", "png16", "oni"
+  std::filesystem::path path;  ///< what was opened
 };
 
 /// Writes the canonical layout. camera.json is written by create(), each frame as it
@@ -54,10 +57,11 @@ struct SequenceInfo {
 class SequenceWriter {
  public:
   /// Starts a sequence in dir (created if needed) and writes camera.json; errors for bad
-  /// intrinsics, depth scale or frame rate, or a directory that already holds a sequence.
+  /// intrinsics, depth scale, frame rate or near range, or a directory that already holds a
+  /// sequence. minRangeM: the camera's near range (m), 0 = not known (not written).
   static Result<SequenceWriter> create(const std::filesystem::path& dir,
                                        const Intrinsics& intrinsics, float depthScale,
-                                       float framesPerSecond = 30.0f);
+                                       float framesPerSecond = 30.0f, float minRangeM = 0.0f);
   SequenceWriter(SequenceWriter&&) noexcept;             ///< Moves the writer.
   SequenceWriter& operator=(SequenceWriter&&) noexcept;  ///< Moves the writer.
   ~SequenceWriter();  ///< closes (errors are logged; call close() to see them)

@@ -32,9 +32,13 @@ constexpr int kLimbEndRounds = 2;
 constexpr float kLimbEndMoveFactor = 0.5f;
 // A limb cut off by the sensor's near range is cut within this depth (m) of its nearest point.
 constexpr float kNearCutDepthM = 0.03f;
-// ... and nearer than this (m): depth cameras measure nothing nearer than 0.2-0.5 m, while a hand
-// tracked that near is rare; a hole in a hand farther away is missing data, not a cut.
+// ... and nearer than this (m), or than kNearCutAboveRangeM beyond the sensor's near range
+// (SegmentationConfig::sensorMinRangeM) when that is farther: a hand tracked that near is rare,
+// and a hole in a hand farther away is missing data, not a cut (the surface that a cut ends
+// comes within a centimetre or two of the near range; 10 cm took holes in fingers pointing at
+// a structured-light camera 0.55-0.6 m away for cuts).
 constexpr float kNearCutMaxDepthM = 0.30f;
+constexpr float kNearCutAboveRangeM = 0.05f;
 // Pieces of a hand broken up by missing data (fingers seen edge-on by a structured-light
 // camera), in metres: taken together as one volume when at most kPieceDepthM behind the nearest
 // of them (the depth of a hand seen edge-on, fingers curled); joining a volume taken when at
@@ -149,8 +153,9 @@ bool CloudPipeline::Impl::findLimbEnd(const DepthGrid& grid, int seed, const Gro
   if (r.areaM2 > 0.5f * std::numbers::pi_v<float> * coarseRadius * coarseRadius) return false;
   const float limbRadius = kLimbRadiusFactor * seg.handRadiusM;
   // A near cut is where the limb is nearest (within kNearCutDepthM of its nearest point) and
-  // near the camera (kNearCutMaxDepthM).
-  const float nearCut = std::min(r.nearestPoint.z() + kNearCutDepthM, kNearCutMaxDepthM);
+  // near the camera (nearCutMax).
+  const float nearCutMax = std::max(kNearCutMaxDepthM, seg.sensorMinRangeM + kNearCutAboveRangeM);
+  const float nearCut = std::min(r.nearestPoint.z() + kNearCutDepthM, nearCutMax);
   int cell = limbEnd.find(grid, k, seed, seg.step, limbRadius, seg.borderMarginPixels, nearCut);
   if (cell < 0) return false;
   end = grid.point(k, cell % grid.width, cell / grid.width);

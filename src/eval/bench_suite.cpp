@@ -297,6 +297,7 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   if (!seq) return Error{seq.message()};
   track::TrackerSettings settings = item.tracker;
   settings.keepCandidates = false;  // no pictures here
+  settings.cloud.segmentation.sensorMinRangeM = seq->profile().minRange;
   auto tracker = track::Tracker::create(seq->model(0), seq->intrinsics(), settings);
   if (!tracker) return Error{tracker.message()};
   SuiteItemResult result;

@@ -137,6 +137,12 @@ Result<CameraDescription> parseCameraJson(std::string_view text, const std::stri
     if (*fps <= 0.0 || *fps > 10000.0) return fail(name, "\"fps\" must be in (0, 10000]");
     camera.framesPerSecond = static_cast<float>(*fps);
   }
+  if (document->contains("min_range_m")) {
+    auto range = number(*document, "min_range_m", name);
+    if (!range) return range.error();
+    if (*range < 0.0 || *range > 100.0) return fail(name, "\"min_range_m\" must be in [0, 100]");
+    camera.minRangeM = static_cast<float>(*range);
+  }
   return camera;
 }
 
@@ -146,7 +152,8 @@ std::string formatCameraJson(const CameraDescription& camera) {
          ",\"width\":" + std::to_string(k.width) + ",\"height\":" + std::to_string(k.height) +
          ",\"fx\":" + shortest(k.fx) + ",\"fy\":" + shortest(k.fy) + ",\"cx\":" + shortest(k.cx) +
          ",\"cy\":" + shortest(k.cy) + ",\"depth_scale\":" + shortest(camera.depthScale) +
-         ",\"fps\":" + shortest(camera.framesPerSecond) + "}\n";
+         ",\"fps\":" + shortest(camera.framesPerSecond) +
+         (camera.minRangeM > 0.0f ? ",\"min_range_m\":" + shortest(camera.minRangeM) : "") + "}\n";
 }
 
 Result<CameraDescription> parseIntelCameraJson(std::string_view text, const std::string& name) {

@@ -15,9 +15,11 @@ struct CameraDescription {
   Intrinsics intrinsics;
   float depthScale = 0.001f;      // metres per stored unit
   float framesPerSecond = 30.0f;  // optional "fps" key
+  float minRangeM = 0.0f;         // optional "min_range_m" key: the near range; 0 = not known
 };
 
-// {"version":1,"width":W,"height":H,"fx":..,"fy":..,"cx":..,"cy":..,"depth_scale":s[,"fps":f]}
+// {"version":1,"width":W,"height":H,"fx":..,"fy":..,"cx":..,"cy":..,"depth_scale":s[,"fps":f]
+//  [,"min_range_m":r]}
 Result<CameraDescription> parseCameraJson(std::string_view text, const std::string& name);
 std::string formatCameraJson(const CameraDescription& camera);
 

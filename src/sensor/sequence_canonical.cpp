@@ -119,6 +119,7 @@ Result<OpenedSource> openCanonical(const fs::path& dir) {
   opened.info.intrinsics = camera->intrinsics;
   opened.info.depthScale = camera->depthScale;
   opened.info.framesPerSecond = camera->framesPerSecond;
+  opened.info.minRangeM = camera->minRangeM;
   opened.info.frameCount = static_cast<int>(numbers.size());
   opened.info.format = "canonical";
   opened.info.path = dir;

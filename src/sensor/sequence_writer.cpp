@@ -24,7 +24,8 @@ SequenceWriter::~SequenceWriter() {
 }
 
 Result<SequenceWriter> SequenceWriter::create(const fs::path& dir, const Intrinsics& intrinsics,
-                                              float depthScale, float framesPerSecond) {
+                                              float depthScale, float framesPerSecond,
+                                              float minRangeM) {
   if (const std::string problem = intrinsics.problem(); !problem.empty()) {
     return Error{dir.string() + ": cannot write a sequence with bad intrinsics: " + problem};
   }
@@ -33,6 +34,9 @@ Result<SequenceWriter> SequenceWriter::create(const fs::path& dir, const Intrins
   if (!std::isfinite(framesPerSecond) || framesPerSecond <= 0.0f) {
     return Error{dir.string() + ": frames per second must be positive"};
   }
+  if (!std::isfinite(minRangeM) || minRangeM < 0.0f || minRangeM > 100.0f) {
+    return Error{dir.string() + ": the near range must be in [0, 100] m"};
+  }
   std::error_code ec;
   if (fs::exists(dir / "camera.json", ec) || fs::exists(dir / "depth", ec)) {
     return Error{dir.string() +
@@ -40,7 +44,8 @@ Result<SequenceWriter> SequenceWriter::create(const fs::path& dir, const Intrins
   }
   fs::create_directories(dir / "depth", ec);
   if (ec) return Error{(dir / "depth").string() + ": cannot create: " + ec.message()};
-  const std::string json = sensor::formatCameraJson({intrinsics, depthScale, framesPerSecond});
+  const std::string json =
+      sensor::formatCameraJson({intrinsics, depthScale, framesPerSecond, minRangeM});
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(json.data());  // NOLINT
   if (auto ok = sensor::writeFileBytes(dir / "camera.json", {bytes, json.size()}); !ok)
     return ok.error();

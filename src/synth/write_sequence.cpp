@@ -80,8 +80,9 @@ std::string describe(const SyntheticSequence& seq, int writtenFrames) {
 
 Status writeSequence(SyntheticSequence& seq, const std::filesystem::path& dir,
                      const std::function<bool(int, int)>& progress) {
-  Result<SequenceWriter> writer = SequenceWriter::create(
-      dir, seq.intrinsics(), seq.profile().depthScale, seq.options().framesPerSecond);
+  Result<SequenceWriter> writer =
+      SequenceWriter::create(dir, seq.intrinsics(), seq.profile().depthScale,
+                             seq.options().framesPerSecond, seq.profile().minRange);
   if (!writer) return writer.error();
   std::ofstream secondHand;
   if (seq.handCount() == 2) {

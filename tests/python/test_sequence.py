@@ -31,6 +31,9 @@ def test_synth_folder(clip):
     assert np.array_equal(seq.ground_truth_array()[5], seq.ground_truth(5))
     info = seq.info
     assert info["frames"] == FRAMES and info["format"] == "canonical"
+    # the sensor's near range, which the tracker's segmentation is told (docs/cloud.md)
+    assert seq.min_range_m == np.float32(camera["min_range_m"]) == info["min_range_m"]
+    assert dynahand.synth("wave", frames=1, profile="structured-light").min_range_m == 0.5
     assert dynahand.Tracker(info, detector=False).camera == seq.camera
 
 

@@ -171,6 +171,14 @@ TEST(BadInput, ZeroDepthScale) {
   expectError(openError(seq), seq / "camera.json", "\"depth_scale\" must be in (0, 1]");
 }
 
+TEST(BadInput, NegativeNearRange) {
+  const fs::path seq = writeSequence("negative-near-range");
+  writeText(seq / "camera.json",
+            R"({"width":64,"height":48,"fx":60,"fy":60,"cx":31.5,"cy":23.5,"depth_scale":0.001,)"
+            R"("min_range_m":-0.2})");
+  expectError(openError(seq), seq / "camera.json", "\"min_range_m\" must be in [0, 100]");
+}
+
 TEST(BadInput, CameraJsonNotJson) {
   const fs::path seq = writeSequence("not-json");
   writeText(seq / "camera.json", "{\"width\":64,");

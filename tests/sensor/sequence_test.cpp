@@ -104,6 +104,31 @@ TEST(SequenceFormat, CameraJsonHasTheAgreedKeys) {
   }
 }
 
+// The camera's near range is optional: written and read back when given, absent (0) when not,
+// refused when negative.
+TEST(SequenceFormat, NearRangeRoundTripsThroughCameraJson) {
+  const fs::path dir = test::scratchDir("sensor/nearrange");
+  {
+    auto writer = SequenceWriter::create(dir / "with", kIntrinsics, 0.001f, 30.0f, 0.5f);
+    ASSERT_TRUE(writer) << writer.message();
+    ASSERT_TRUE(writer->write(rampFrame(0, 0.001f)));
+    auto without = SequenceWriter::create(dir / "without", kIntrinsics, 0.001f);
+    ASSERT_TRUE(without) << without.message();
+    ASSERT_TRUE(without->write(rampFrame(0, 0.001f)));
+  }
+  EXPECT_NE(readText(dir / "with" / "camera.json").find("\"min_range_m\":0.5"), std::string::npos);
+  EXPECT_EQ(readText(dir / "without" / "camera.json").find("min_range_m"), std::string::npos);
+  auto with = SequenceReader::open(dir / "with");
+  ASSERT_TRUE(with) << with.message();
+  EXPECT_EQ(with->info().minRangeM, 0.5f);
+  auto without = SequenceReader::open(dir / "without");
+  ASSERT_TRUE(without) << without.message();
+  EXPECT_EQ(without->info().minRangeM, 0.0f);
+  auto negative = SequenceWriter::create(dir / "negative", kIntrinsics, 0.001f, 30.0f, -0.1f);
+  ASSERT_FALSE(negative);
+  EXPECT_NE(negative.message().find("near range"), std::string::npos) << negative.message();
+}
+
 TEST(SequenceFormat, NoGroundTruthFileWhenNoneGiven) {
   const fs::path seq = test::scratchDir("sensor/nogt") / "seq";
   {

@@ -77,7 +77,8 @@ std::unique_ptr<PySynthClip> makeSynth(const std::string& motion, int frames,
                                        std::uint64_t seed, float fps, float speed,
                                        const std::string& background, bool table,
                                        const py::object& handSize, float proportionSpread,
-                                       std::uint64_t proportionSeed) {
+                                       std::uint64_t proportionSeed, const std::string& heldObject,
+                                       float heldObjectSize) {
   synth::SynthOptions o;  // `dynahand synth`'s defaults unless given
   o.clip = motion;
   o.frameCount = frames;
@@ -103,6 +104,18 @@ std::unique_ptr<PySynthClip> makeSynth(const std::string& motion, int frames,
                           "')");
   }
   o.scene.table = table;
+  bool knownObject = false;
+  for (const auto object : {synth::HeldObject::None, synth::HeldObject::Ball,
+                            synth::HeldObject::Cylinder, synth::HeldObject::Box}) {
+    if (heldObject == synth::heldObjectName(object)) {
+      o.scene.heldObject = object;
+      knownObject = true;
+    }
+  }
+  if (!knownObject)
+    throw py::value_error("held_object must be 'none', 'ball', 'cylinder' or 'box' (got '" +
+                          heldObject + "')");
+  o.scene.heldObjectSize = heldObjectSize;
   if (!handSize.is_none()) {
     try {
       const auto pair = handSize.cast<std::pair<float, float>>();
@@ -165,8 +178,10 @@ void bindSynth(py::module_& m) {
         py::arg("fps") = 30.0f, py::arg("speed") = 1.0f, py::arg("background") = "none",
         py::arg("table") = false, py::arg("hand_size") = py::none(),
         py::arg("proportion_spread") = 0.0f, py::arg("proportion_seed") = 1,
+        py::arg("held_object") = "none", py::arg("held_object_size") = 0.025f,
         "A synthetic clip in memory, as `dynahand synth --motion M --frames N --profile P "
-        "--placement desk|head --seed S ...` renders it. motion: a clip name (clips()); "
+        "--placement desk|head --seed S --object O --object-size R ...` renders it. motion: a "
+        "clip name (clips()); held_object: none, ball, cylinder or box against the palm; "
         "profile: ideal, tof, structured-light or active-stereo. ValueError for an unknown "
         "clip or profile or a value out of range.");
   m.def(

@@ -257,8 +257,11 @@ def synth(
     hand_size: Optional[Tuple[float, float]] = None,
     proportion_spread: float = 0.0,
     proportion_seed: int = 1,
+    held_object: str = "none",
+    held_object_size: float = 0.025,
 ) -> SyntheticClip:
-    """A synthetic clip in memory, as `dynahand synth` renders it."""
+    """A synthetic clip in memory, as `dynahand synth` renders it (held_object: none, ball,
+    cylinder or box against the palm; held_object_size: its radius or half-thickness, m)."""
 
 def clips() -> list[str]: ...
 

@@ -70,7 +70,7 @@ const CommandRegistration kSynthCommand{Command{
         synth::SynthOptions options;
         std::string out, contactSheet;
         bool list = false;
-        std::string placement = "desk", background = "none";
+        std::string placement = "desk", background = "none", heldObject = "none";
         float proportionSpread = 0.0f;
         std::uint64_t proportionSeed = 1;
       };
@@ -117,6 +117,15 @@ const CommandRegistration kSynthCommand{Command{
                      "distance from the wrist down to the table, m")
           ->capture_default_str()
           ->check(CLI::Range(0.0, 2.0));
+      sub.add_option("--object", flags->heldObject,
+                     "an object held against the palm, moving with the hand: none, ball, cylinder "
+                     "(rounded ends, across the palm) or box (docs/synth.md)")
+          ->capture_default_str()
+          ->check(CLI::IsMember({"none", "ball", "cylinder", "box"}));
+      sub.add_option("--object-size", o.scene.heldObjectSize,
+                     "held object's radius (ball, cylinder) or half-thickness (box), m")
+          ->capture_default_str()
+          ->check(CLI::Range(0.01, 0.06));
       sub.add_option("--hand-distance", o.scene.handDistance,
                      "camera to hand distance, m (0 = auto per profile)")
           ->capture_default_str();
@@ -150,6 +159,7 @@ const CommandRegistration kSynthCommand{Command{
           "/tmp/count\n"
           "  dynahand synth --motion pinch --proportion-spread 0.15 --proportion-seed 7 --out "
           "/tmp/pinch\n"
+          "  dynahand synth --motion grasp-cylinder --object cylinder --out /tmp/grasp\n"
           "  dynahand synth --contact-sheet docs/images/synth_contact_sheet.png\n"
           "Output: camera.json, depth/*.png, groundtruth.jsonl, poses.jsonl, synth.json "
           "(docs/synth.md).");
@@ -166,6 +176,12 @@ const CommandRegistration kSynthCommand{Command{
             {"wall", synth::Background::Wall},
             {"torso", synth::Background::Torso}};
         opts.scene.background = backgrounds.at(flags->background);
+        const std::map<std::string, synth::HeldObject> objects = {
+            {"none", synth::HeldObject::None},
+            {"ball", synth::HeldObject::Ball},
+            {"cylinder", synth::HeldObject::Cylinder},
+            {"box", synth::HeldObject::Box}};
+        opts.scene.heldObject = objects.at(flags->heldObject);
         opts.proportions = synth::randomProportions(flags->proportionSeed, flags->proportionSpread);
         if (!flags->contactSheet.empty()) {
           synth::Scene scene = opts.scene;

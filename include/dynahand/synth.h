@@ -66,6 +66,12 @@ enum class CameraPlacement {
 };
 /// What is behind the hand: nothing, a wall plane facing the camera, or a standing torso.
 enum class Background { None, Wall, Torso };
+/// An object held against the first hand's palm, moving with it (Scene::heldObjectSize sets
+/// its size): a ball; a cylinder with rounded ends lying across the palm (index to little
+/// finger side), 12 cm between the centres of its ends; a box lying the same way, 12 cm long.
+enum class HeldObject { None, Ball, Cylinder, Box };
+/// "none", "ball", "cylinder", "box".
+const char* heldObjectName(HeldObject object);
 
 /// The synthetic scene around the hand.
 struct Scene {
@@ -75,6 +81,10 @@ struct Scene {
   bool table = false;                ///< a table plane below the hand
   float tableDrop = 0.20f;           ///< m from the wrist down to the table (world down)
   float handDistance = 0.0f;         ///< m, camera to hand; 0 = auto: max(0.40, minRange + 0.2)
+  HeldObject heldObject = HeldObject::None;  ///< an object in the first hand, labelled HeldObject
+  /// m: the ball's and the cylinder's radius, half the box's thickness (its cross-section is
+  /// square), in [0.01, 0.06]. The object touches the palm's skin on its palmar side.
+  float heldObjectSize = 0.025f;
 };
 
 // ---- Sequences ----

@@ -44,6 +44,14 @@ struct RoundCone {
   float rb = 0.0f;        ///< m
 };
 
+/// A solid box: centre, orientation (columns: its unit axes) and half extents along them.
+/// Metres, camera frame.
+struct OrientedBox {
+  Vec3 centre = Vec3::Zero();       ///< m
+  Mat3 axes = Mat3::Identity();     ///< columns: the box's axes, unit length, orthogonal
+  Vec3 halfExtents = Vec3::Zero();  ///< m, half the box's size along each axis
+};
+
 /// First intersection of the ray t * dir (t > 0, from the camera centre) with the solid
 /// round cone; returns the ray parameter t (so the hit is t * dir) or a negative value for
 /// a miss. `dir` need not be unit length. Exposed for tests and other analytic users.
@@ -114,8 +122,14 @@ inline constexpr int kMaxHandPrimitives = 48;
 void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii,
                       std::vector<RoundCone>& out);
 
-/// What each rendered pixel shows.
-enum class PixelLabel : std::uint8_t { Empty = 0, Background = 1, Hand0 = 2, Hand1 = 3 };
+/// What each rendered pixel shows (HeldObject: an object held in the first hand).
+enum class PixelLabel : std::uint8_t {
+  Empty = 0,
+  Background = 1,
+  Hand0 = 2,
+  Hand1 = 3,
+  HeldObject = 4
+};
 
 /// An infinite plane n . x = offset in the camera frame (n unit length), e.g. a wall or
 /// a table top.
@@ -139,6 +153,9 @@ class DepthRenderer {
   void clear();
   /// Draws primitives with the given label, keeping the nearest surface per pixel.
   void draw(std::span<const RoundCone> primitives, PixelLabel label);
+  /// Draws a box with the given label, keeping the nearest surface per pixel; a box reaching
+  /// nearer than 5 cm to the camera plane is not drawn.
+  void draw(const OrientedBox& box, PixelLabel label);
 
   /// (height x width) depth in metres, 0 where nothing was hit.
   std::span<const float> depth() const { return depth_; }

@@ -193,6 +193,62 @@ void DepthRenderer::draw(std::span<const RoundCone> primitives, PixelLabel label
   for (const RoundCone& cone : primitives) drawOne(cone, label, depth_, labels_);
 }
 
+void DepthRenderer::draw(const OrientedBox& box, PixelLabel label) {
+  testedPixels_ = 0;
+  const Intrinsics& k = intrinsics_;
+  // The projected bounding rectangle of the eight corners.
+  float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+  for (int corner = 0; corner < 8; ++corner) {
+    Vec3 p = box.centre;
+    for (int axis = 0; axis < 3; ++axis) {
+      const float sign = (corner >> axis) & 1 ? 1.0f : -1.0f;
+      p += sign * box.halfExtents[axis] * box.axes.col(axis);
+    }
+    if (p.z() <= kNearPlane) return;
+    const float u = k.fx * p.x() / p.z() + k.cx;
+    const float v = k.fy * p.y() / p.z() + k.cy;
+    u0 = std::min(u0, u);
+    u1 = std::max(u1, u);
+    v0 = std::min(v0, v);
+    v1 = std::max(v1, v);
+  }
+  const int uBegin = std::max(0, static_cast<int>(std::floor(u0)));
+  const int uEnd = std::min(k.width - 1, static_cast<int>(std::ceil(u1)));
+  const int vBegin = std::max(0, static_cast<int>(std::floor(v0)));
+  const int vEnd = std::min(k.height - 1, static_cast<int>(std::ceil(v1)));
+  // The ray in the box's frame: origin o = -R^T c, direction R^T dir; slabs |x_i| <= h_i.
+  const Vec3 origin = -(box.axes.transpose() * box.centre);
+  const int w = k.width;
+  for (int v = vBegin; v <= vEnd; ++v) {
+    for (int u = uBegin; u <= uEnd; ++u) {
+      const Vec3 dir(rayX_[static_cast<std::size_t>(u)], rayY_[static_cast<std::size_t>(v)], 1.0f);
+      const Vec3 local = box.axes.transpose() * dir;
+      ++testedPixels_;
+      float enter = 0.0f, leave = INFINITY;
+      bool miss = false;
+      for (int axis = 0; axis < 3 && !miss; ++axis) {
+        const float h = box.halfExtents[axis];
+        if (std::fabs(local[axis]) < 1e-12f) {
+          miss = std::fabs(origin[axis]) > h;
+          continue;
+        }
+        float t0 = (-h - origin[axis]) / local[axis];
+        float t1 = (h - origin[axis]) / local[axis];
+        if (t0 > t1) std::swap(t0, t1);
+        enter = std::max(enter, t0);
+        leave = std::min(leave, t1);
+        miss = enter > leave;
+      }
+      if (miss || enter <= kNearPlane) continue;
+      const std::size_t i = static_cast<std::size_t>(v) * w + static_cast<std::size_t>(u);
+      if (depth_[i] == 0.0f || enter < depth_[i]) {
+        depth_[i] = enter;  // depth, since dir.z == 1
+        labels_[i] = label;
+      }
+    }
+  }
+}
+
 void DepthRenderer::drawOne(const RoundCone& original, PixelLabel label, std::vector<float>& depth,
                             std::vector<PixelLabel>& labels) {
   RoundCone cone = original;

@@ -5,6 +5,24 @@
 #include <cmath>
 #include <numbers>
 
+namespace dynahand::synth {
+
+const char* heldObjectName(HeldObject object) {
+  switch (object) {
+    case HeldObject::Ball:
+      return "ball";
+    case HeldObject::Cylinder:
+      return "cylinder";
+    case HeldObject::Box:
+      return "box";
+    case HeldObject::None:
+      break;
+  }
+  return "none";
+}
+
+}  // namespace dynahand::synth
+
 namespace dynahand::synth::detail {
 namespace {
 
@@ -73,6 +91,49 @@ Vec3 shoulderPosition(CameraPlacement placement, bool leftHand, float handDistan
 
 float resolvedHandDistance(const Scene& scene, const SensorProfile& profile) {
   return scene.handDistance > 0.0f ? scene.handDistance : std::max(0.40f, profile.minRange + 0.2f);
+}
+
+void drawHeldObject(const Scene& scene, const HandKeypoints& keypoints, bool leftHand, float scale,
+                    DepthRenderer& renderer) {
+  if (scene.heldObject == HeldObject::None) return;
+  // The palm's frame: along it (wrist to middle knuckle), across it (little to index knuckle),
+  // and its palmar normal.
+  const Vec3 along = (keypoints[9] - keypoints[0]).normalized();
+  Vec3 across = keypoints[5] - keypoints[17];
+  across = (across - across.dot(along) * along).normalized();
+  Vec3 palmar = across.cross(along);
+  if (leftHand) palmar = -palmar;
+  // The palm's skin lies about its half-thickness (12.5 mm for the reference hand) plus a
+  // little padding from the bones the keypoints sit on.
+  constexpr float kPalmSkinM = 0.015f;
+  constexpr float kHalfLengthM = 0.06f;  // the cylinder's and the box's half-length
+  const float size = scene.heldObjectSize;
+  const Vec3 centre = 0.5f * (keypoints[0] + keypoints[9]) + palmar * (size + kPalmSkinM * scale);
+  switch (scene.heldObject) {
+    case HeldObject::Ball: {
+      const RoundCone ball{centre, centre, size, size};
+      renderer.draw(std::span(&ball, 1), PixelLabel::HeldObject);
+      break;
+    }
+    case HeldObject::Cylinder: {
+      const RoundCone cylinder{centre - kHalfLengthM * across, centre + kHalfLengthM * across, size,
+                               size};
+      renderer.draw(std::span(&cylinder, 1), PixelLabel::HeldObject);
+      break;
+    }
+    case HeldObject::Box: {
+      OrientedBox box;
+      box.centre = centre;
+      box.axes.col(0) = across;
+      box.axes.col(1) = palmar;
+      box.axes.col(2) = across.cross(palmar);
+      box.halfExtents = Vec3(kHalfLengthM, size, size);
+      renderer.draw(box, PixelLabel::HeldObject);
+      break;
+    }
+    case HeldObject::None:
+      break;
+  }
 }
 
 SceneGeometry sceneGeometry(const Scene& scene, float handDistance) {

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "dynahand/synth.h"
+#include "dynahand/synth_render.h"
 
 namespace dynahand::synth::detail {
 
@@ -25,6 +26,12 @@ struct SceneGeometry {
   std::vector<RoundCone> solids;
 };
 SceneGeometry sceneGeometry(const Scene& scene, float handDistance);
+
+// Draws the scene's held object (none: nothing) against the palm of the hand whose keypoints
+// are given (MediaPipe order, camera frame), labelled PixelLabel::HeldObject. `scale`: the
+// hand's size relative to the reference hand (the palm's thickness scales with it).
+void drawHeldObject(const Scene& scene, const HandKeypoints& keypoints, bool leftHand, float scale,
+                    DepthRenderer& renderer);
 
 // The hand distance the scene uses for a profile (resolves handDistance = 0).
 float resolvedHandDistance(const Scene& scene, const SensorProfile& profile);

@@ -54,6 +54,8 @@ Status validate(const SynthOptions& o) {
     return bad("background distance must be in [0.02, 5] m");
   if (!(o.scene.tableDrop >= 0.0f && o.scene.tableDrop <= 2.0f))
     return bad("table drop must be in [0, 2] m");
+  if (!(o.scene.heldObjectSize >= 0.01f && o.scene.heldObjectSize <= 0.06f))
+    return bad("held object size must be in [0.01, 0.06] m");
   if (!(o.scene.handDistance == 0.0f ||
         (o.scene.handDistance >= 0.1f && o.scene.handDistance <= 3.0f)))
     return bad("hand distance must be 0 (auto) or in [0.1, 3] m");
@@ -310,6 +312,9 @@ const SyntheticFrame& SyntheticSequence::frame(int index) {
     s.surface.clear();
     buildHandSurface(skeleton, s.radii, s.surface);
     s.renderer.draw(s.surface, h == 0 ? PixelLabel::Hand0 : PixelLabel::Hand1);
+    if (h == 0)
+      detail::drawHeldObject(s.options.scene, truth.keypoints, skeleton.leftHand, s.surfaceScale,
+                             s.renderer);
   }
   s.sensor.apply(s.renderer.depth(), s.renderer.labels(), index,
                  static_cast<double>(index) / static_cast<double>(s.options.framesPerSecond),

@@ -12,7 +12,7 @@
 namespace dynahand::synth {
 namespace {
 
-constexpr int kSynthFormatVersion = 2;
+constexpr int kSynthFormatVersion = 3;
 
 const char* placementName(CameraPlacement p) {
   return p == CameraPlacement::DeskFacing ? "desk" : "head";
@@ -59,7 +59,9 @@ std::string describe(const SyntheticSequence& seq, int writtenFrames) {
                 {"background_distance_m", o.scene.backgroundDistance},
                 {"table", o.scene.table},
                 {"table_drop_m", o.scene.tableDrop},
-                {"hand_distance_m", o.scene.handDistance}};
+                {"hand_distance_m", o.scene.handDistance},
+                {"held_object", heldObjectName(o.scene.heldObject)},
+                {"held_object_size_m", o.scene.heldObjectSize}};
   const HandProportions& p = o.proportions;
   // Element by element (GCC's -Wnull-dereference misfires on nlohmann's std::array path).
   nlohmann::ordered_json bones = nlohmann::ordered_json::array();

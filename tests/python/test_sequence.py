@@ -58,3 +58,19 @@ def test_index_out_of_range(clip):
     seq = dynahand.open_sequence(clip)
     with pytest.raises(IndexError, match="out of range"):
         seq[FRAMES]
+
+
+def test_held_object_changes_the_depth_only_in_front_of_the_palm():
+    bare = dynahand.synth("grasp-cylinder", frames=1, profile="ideal")
+    held = dynahand.synth("grasp-cylinder", frames=1, profile="ideal", held_object="box")
+    a, b = bare[0][0].astype(np.int32), held[0][0].astype(np.int32)
+    changed = (a != b) & (b > 0)
+    assert changed.sum() > 200
+    # the box lies in front of the hand (nearer) wherever both show something
+    both = changed & (a > 0)
+    assert (b[both] < a[both]).all()
+    assert np.array_equal(bare[0][2], held[0][2])  # ground truth: the hand's keypoints only
+    with pytest.raises(ValueError, match="held_object must be"):
+        dynahand.synth("wave", frames=1, held_object="mug")
+    with pytest.raises(ValueError, match="held object size"):
+        dynahand.synth("wave", frames=1, held_object="ball", held_object_size=0.5)

@@ -159,7 +159,8 @@ TEST(HandProportions, OutOfRangeFactorsAreRejectedAndWrittenToSynthJson) {
   ASSERT_TRUE(writeSequence(*seq, dir).ok());
   std::ifstream in(dir / "synth.json");
   const nlohmann::json j = nlohmann::json::parse(in);
-  EXPECT_EQ(j["version"], 2);
+  EXPECT_EQ(j["version"], 3);
+  EXPECT_EQ(j["scene"]["held_object"], "none");
   ASSERT_TRUE(j.contains("proportions"));
   HandProportions read;
   for (std::size_t f = 0; f < 5; ++f) {

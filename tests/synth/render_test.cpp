@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+
+#include <cmath>
 
 #include "dynahand/synth_render.h"
 
@@ -145,6 +148,37 @@ TEST(DepthRenderer, BackgroundPlaneAndNearestSurfaceWins) {
   EXPECT_EQ(renderer.labels()[centre], PixelLabel::Hand1);
   renderer.clear();  // back to the wall
   EXPECT_FLOAT_EQ(renderer.depth()[centre], 0.8f);
+}
+
+// A box facing the camera shows its front face at its depth; turned 45 degrees about the
+// vertical axis, its nearest edge; the nearer of box and sphere wins per pixel.
+TEST(DepthRenderer, BoxShowsItsNearestFace) {
+  const Intrinsics k = testCamera();
+  DepthRenderer renderer(k);
+  OrientedBox box;
+  box.centre = Vec3(0.0f, 0.0f, 0.5f);
+  box.halfExtents = Vec3(0.05f, 0.03f, 0.02f);
+  renderer.draw(box, PixelLabel::HeldObject);
+  const std::size_t centre = static_cast<std::size_t>(120) * k.width + 160;
+  EXPECT_NEAR(renderer.depth()[centre], 0.48f, 1e-5f);
+  EXPECT_EQ(renderer.labels()[centre], PixelLabel::HeldObject);
+  // Its image: 0.10 x 0.06 m at 0.48 m, in pixels of focal length k.fx, k.fy.
+  int drawn = 0;
+  for (const PixelLabel l : renderer.labels()) drawn += l == PixelLabel::HeldObject;
+  const float expected = (k.fx * 0.10f / 0.48f) * (k.fy * 0.06f / 0.48f);
+  EXPECT_NEAR(static_cast<float>(drawn), expected, 0.1f * expected);
+
+  renderer.clear();
+  const float c = std::cos(std::numbers::pi_v<float> / 4.0f);
+  box.axes << c, 0.0f, c, 0.0f, 1.0f, 0.0f, -c, 0.0f, c;
+  box.halfExtents = Vec3(0.03f, 0.03f, 0.03f);
+  renderer.draw(box, PixelLabel::HeldObject);
+  // (the pixel centre lies half a pixel off the axis: 1 mm farther along the 45-degree face)
+  EXPECT_NEAR(renderer.depth()[centre], 0.5f - 0.03f * std::sqrt(2.0f), 1.5e-3f);
+  const RoundCone sphere{{0.0f, 0.0f, 0.4f}, {0.0f, 0.0f, 0.4f}, 0.01f, 0.01f};
+  renderer.draw(std::span(&sphere, 1), PixelLabel::Hand0);
+  EXPECT_EQ(renderer.labels()[centre], PixelLabel::Hand0);
+  EXPECT_NEAR(renderer.depth()[centre], 0.39f, 1e-4f);
 }
 
 TEST(DepthRenderer, PrimitiveBehindTheCameraIsNotDrawnAndCrossingOneIsClipped) {

@@ -265,6 +265,42 @@ TEST(SyntheticSequence, SceneBackgroundTableAndForearmEnteringFromTheBorder) {
   }
 }
 
+// Each held object is drawn against the palm on every frame, labelled as the object, nearer
+// than the hand's back seen from a desk camera (palm toward it); without one, no pixel is.
+TEST(SyntheticSequence, HeldObjectsAreDrawnAgainstThePalm) {
+  for (const HeldObject object :
+       {HeldObject::None, HeldObject::Ball, HeldObject::Cylinder, HeldObject::Box}) {
+    SCOPED_TRACE(heldObjectName(object));
+    SynthOptions o = optionsFor("grasp-cylinder", "ideal", 12);
+    o.scene.heldObject = object;
+    Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+    ASSERT_TRUE(seq.ok()) << seq.error().message;
+    for (int f = 0; f < 12; f += 11) {
+      const SyntheticFrame& frame = seq->frame(f);
+      const Keypoints21& kp = frame.hands[0].keypoints;
+      const Vec3 palm = 0.5f * (kp[0] + kp[9]);
+      int pixels = 0;
+      float nearest = 1e9f;
+      for (std::size_t i = 0; i < seq->labels().size(); ++i) {
+        if (seq->labels()[i] != PixelLabel::HeldObject) continue;
+        ++pixels;
+        nearest = std::min(nearest, seq->exactDepth()[i]);
+      }
+      if (object == HeldObject::None) {
+        EXPECT_EQ(pixels, 0);
+        continue;
+      }
+      EXPECT_GT(pixels, 200) << "frame " << f;
+      // In front of the palm (toward the camera) by the palm's skin and the object's size.
+      EXPECT_LT(nearest, palm.z() - 0.02f) << "frame " << f;
+      EXPECT_GT(nearest, palm.z() - 0.1f) << "frame " << f;
+    }
+  }
+  SynthOptions bad = optionsFor("wave", "ideal", 1);
+  bad.scene.heldObjectSize = 0.2f;
+  EXPECT_FALSE(SyntheticSequence::create(bad).ok());
+}
+
 TEST(SyntheticSequence, PoseFilePlaybackReproducesTheRecordedPoses) {
   const std::filesystem::path dir = test::scratchDir("synth_pose_playback");
   SynthOptions o = optionsFor("count", "ideal", 12);

@@ -67,6 +67,9 @@ struct SuiteItem {
   std::shared_ptr<const std::vector<model::JointAngles>> poses;
   int poseStart = 0;      ///< index of the first pose played from `poses`
   std::vector<int> cuts;  ///< frames (of this item) where the motion jumps: re-acquisition
+  /// An object held against the palm (synth::Scene::heldObject); joints it hides from the
+  /// camera (their pixel shows the object) are not scored.
+  synth::HeldObject heldObject = synth::HeldObject::None;
 };
 
 /// What standardSuite builds.
@@ -159,6 +162,9 @@ struct SuiteRow {
 /// Groups results into table rows by label: motion-suite groups, standard rows, the ablation
 /// baseline and the ablations (targeted items excluded), in that order.
 std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results);
+/// The row an item is summarised in: its group (motion suite), "ablation: VARIANT", or
+/// "PROFILE / SIZE / gt|auto".
+std::string rowLabel(const SuiteItem& item);
 
 /// The table as fixed-width text (terminal) and as Markdown.
 std::string suiteTableText(const std::vector<SuiteRow>& rows);

@@ -23,6 +23,10 @@ struct SequenceKeypoints {
   std::vector<std::optional<Keypoints21>> groundTruth;  ///< per frame; nullopt: no visible hand
   std::vector<std::optional<Keypoints21>> predicted;    ///< per frame; nullopt: not tracked
   double fps = 30.0;                                    ///< frames per second, for times in seconds
+  /// Optional, per frame: which joints are scored (e.g. those not hidden behind a held
+  /// object); empty = every joint of every frame. Errors, per-frame means and maxima and the
+  /// per-joint means count scored joints only; jitter counts every joint.
+  std::vector<std::array<bool, 21>> scored;
 };
 
 /// Thresholds of computeKeypointMetrics.

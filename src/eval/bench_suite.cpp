@@ -29,12 +29,29 @@ constexpr int kQuickFrames = 8;
 constexpr int kMotionFrames = 90;
 constexpr float kMotionSpeed = 2.5f;
 constexpr float kMotionProportionSpread = 0.15f;
+// The objects of the held-object rows.
+constexpr synth::HeldObject kHeldObjects[] = {synth::HeldObject::Ball, synth::HeldObject::Cylinder,
+                                              synth::HeldObject::Box};
 
-std::string rowLabel(const SuiteItem& item) {
-  if (!item.group.empty()) return item.group;
-  if (item.ablation) return "ablation: " + item.variant;
-  return fmt::format("{} / {} / {}", item.profile, item.size.name, item.autoInit ? "auto" : "gt");
+// The joints of the last frame rendered whose pixel does not show the held object (the
+// object is not in front of them).
+std::array<bool, 21> notHiddenByTheObject(const synth::SyntheticSequence& seq,
+                                          const Keypoints21& keypoints) {
+  const Intrinsics& k = seq.intrinsics();
+  std::array<bool, 21> scored;
+  scored.fill(true);
+  for (std::size_t j = 0; j < keypoints.size(); ++j) {
+    if (!(keypoints[j].z() > 0.0f)) continue;
+    const Vec2 uv = k.project(keypoints[j]);
+    const auto u = static_cast<int>(std::lround(uv.x()));
+    const auto v = static_cast<int>(std::lround(uv.y()));
+    if (u < 0 || v < 0 || u >= k.width || v >= k.height) continue;
+    const std::size_t pixel = static_cast<std::size_t>(v) * k.width + u;
+    scored[j] = seq.labels()[pixel] != synth::PixelLabel::HeldObject;
+  }
+  return scored;
 }
+
 // The standard items the ablations are compared with.
 bool isAblationBaseline(const SuiteItem& item) {
   return !item.ablation && item.group.empty() && item.profile == "tof" &&
@@ -202,6 +219,29 @@ Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
     }
   }
 
+  // Held objects (tof, gt start): the grasping clips with each object.
+  for (synth::CameraPlacement placement : placements) {
+    for (const char* clip : {"grasp-cylinder", "reach-grasp-lift"}) {
+      for (std::size_t o = 0; o < std::size(kHeldObjects); ++o) {
+        if (options.quick && o > 0) continue;
+        SuiteItem item;
+        item.group = fmt::format("held objects: clips x{} / tof / {} / gt", kMotionSpeed,
+                                 placementName(placement));
+        item.clip = clip;
+        item.profile = "tof";
+        item.size = medium;
+        item.frames = clipFrames;
+        item.speed = kMotionSpeed;
+        item.seed = 3000 + o;
+        item.placement = placement;
+        item.proportionSpread = kMotionProportionSpread;
+        item.proportionSeed = nameSeed(item.clip);
+        item.heldObject = kHeldObjects[o];
+        suite.items.push_back(std::move(item));
+      }
+    }
+  }
+
   // The animbank: segments between cuts, and the whole file through its cuts.
   const std::filesystem::path file = options.data / "intel" / "animbank.pose";
   std::error_code ec;
@@ -262,6 +302,28 @@ Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
       }
     }
   }
+  // Held objects: every animbank segment with one of the objects in turn (tof, gt start).
+  for (synth::CameraPlacement placement : placements) {
+    for (int g = 0; g < segmentsUsed; ++g) {
+      const int first = bounds[static_cast<std::size_t>(g)];
+      const int end = bounds[static_cast<std::size_t>(g) + 1];
+      SuiteItem item;
+      item.group =
+          fmt::format("held objects: animbank segments / tof / {} / gt", placementName(placement));
+      item.clip = fmt::format("animbank {}-{}", first, end - 1);
+      item.profile = "tof";
+      item.size = medium;
+      item.frames = options.quick ? std::min(end - first, kQuickFrames) : end - first;
+      item.seed = 3100 + static_cast<std::uint64_t>(g);
+      item.placement = placement;
+      item.proportionSpread = kMotionProportionSpread;
+      item.proportionSeed = nameSeed(item.clip);
+      item.poses = poses;
+      item.poseStart = first;
+      item.heldObject = kHeldObjects[static_cast<std::size_t>(g) % std::size(kHeldObjects)];
+      suite.items.push_back(std::move(item));
+    }
+  }
   for (synth::CameraPlacement placement : placements) {
     SuiteItem item;
     item.group = fmt::format("animbank continuous / tof / {} / gt", placementName(placement));
@@ -293,6 +355,7 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   so.seed = item.seed;
   so.speed = item.speed;
   so.hand = item.size.dimensions;
+  so.scene.heldObject = item.heldObject;
   auto seq = synth::SyntheticSequence::create(so);
   if (!seq) return Error{seq.message()};
   track::TrackerSettings settings = item.tracker;
@@ -314,6 +377,8 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
     result.keypoints.groundTruth.push_back(frame.hands[0].keypoints);
     result.keypoints.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
                                                    : std::nullopt);
+    if (item.heldObject != synth::HeldObject::None)
+      result.keypoints.scored.push_back(notHiddenByTheObject(*seq, frame.hands[0].keypoints));
   }
   auto metrics = computeKeypointMetrics(result.keypoints);
   if (!metrics) return Error{metrics.message()};
@@ -379,6 +444,12 @@ Result<std::vector<SuiteItemResult>> runSuite(const std::vector<SuiteItem>& item
     if (s) results.push_back(std::move(*s));
   }
   return results;
+}
+
+std::string rowLabel(const SuiteItem& item) {
+  if (!item.group.empty()) return item.group;
+  if (item.ablation) return "ablation: " + item.variant;
+  return fmt::format("{} / {} / {}", item.profile, item.size.name, item.autoInit ? "auto" : "gt");
 }
 
 std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results) {

@@ -46,6 +46,10 @@ Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& s,
                  " frames but the prediction has " + std::to_string(s.predicted.size())};
   }
   if (!(s.fps > 0.0)) return Error{"frames per second must be positive"};
+  if (!s.scored.empty() && s.scored.size() != s.groundTruth.size()) {
+    return Error{"the scored-joint mask has " + std::to_string(s.scored.size()) +
+                 " frames but the ground truth has " + std::to_string(s.groundTruth.size())};
+  }
   const std::size_t n = s.groundTruth.size();
   KeypointMetrics m;
   m.frames = static_cast<int>(n);
@@ -57,6 +61,7 @@ Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& s,
   std::vector<double> all;
   all.reserve(n * 21);
   std::array<double, 21> jointSum{};
+  std::array<int, 21> jointCount{};
   std::vector<int> successCount(options.successThresholdsMm.size(), 0);
   std::vector<bool> lost(n, false);
   double jitterSum = 0;
@@ -77,14 +82,18 @@ Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& s,
     }
     ++m.evaluatedFrames;
     double sum = 0, worst = 0;
+    int scored = 0;
     for (int j = 0; j < 21; ++j) {
+      if (!s.scored.empty() && !s.scored[f][static_cast<std::size_t>(j)]) continue;
       const double e = static_cast<double>(((*pr)[j] - (*gt)[j]).norm()) * kMmPerM;
       all.push_back(e);
       jointSum[j] += e;
+      ++jointCount[j];
       sum += e;
       worst = std::max(worst, e);
+      ++scored;
     }
-    m.perFrameMeanMm[f] = sum / 21.0;
+    m.perFrameMeanMm[f] = scored > 0 ? sum / scored : 0.0;
     m.perFrameMaxMm[f] = worst;
     for (std::size_t t = 0; t < successCount.size(); ++t) {
       if (worst <= options.successThresholdsMm[t]) ++successCount[t];
@@ -109,7 +118,8 @@ Result<KeypointMetrics> computeKeypointMetrics(const SequenceKeypoints& s,
     m.medianMm = sortedPercentile(sorted, 0.5);
     m.p95Mm = sortedPercentile(sorted, 0.95);
     m.maxMm = sorted.back();
-    for (int j = 0; j < 21; ++j) m.perJointMeanMm[j] = jointSum[j] / m.evaluatedFrames;
+    for (int j = 0; j < 21; ++j)
+      m.perJointMeanMm[j] = jointCount[j] > 0 ? jointSum[j] / jointCount[j] : 0.0;
   }
   for (std::size_t t = 0; t < successCount.size(); ++t) {
     m.successFraction[t] =

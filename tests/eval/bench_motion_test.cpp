@@ -39,16 +39,22 @@ TEST(MotionSuite, ClipsOnEveryProfileAndPlacementWithVariedHands) {
   EXPECT_NE(suite->skipped.find("animbank rows skipped"), std::string::npos);
   int oneHandClips = 0;
   for (const synth::ClipInfo& c : synth::clips()) oneHandClips += c.handCount == 1;
-  EXPECT_EQ(static_cast<int>(suite->items.size()), oneHandClips * 4 * 2 * 2);
+  // Every one-hand clip on 4 profiles x 2 placements x 2 starts, and the two grasping clips
+  // with 3 held objects on 2 placements.
+  EXPECT_EQ(static_cast<int>(suite->items.size()), oneHandClips * 4 * 2 * 2 + 2 * 3 * 2);
   std::set<std::string> groups;
+  int heldObjects = 0;
   for (const SuiteItem& item : suite->items) {
     groups.insert(item.group);
+    heldObjects += item.heldObject != synth::HeldObject::None;
     EXPECT_EQ(item.speed, 2.5f);
     EXPECT_EQ(item.proportionSpread, 0.15f);
     EXPECT_EQ(item.frames, 90);
     EXPECT_TRUE(item.cuts.empty());
   }
-  EXPECT_EQ(groups.size(), 4u * 2u * 2u);
+  EXPECT_EQ(heldObjects, 2 * 3 * 2);
+  EXPECT_EQ(groups.size(), 4u * 2u * 2u + 2u);
+  EXPECT_TRUE(groups.contains("held objects: clips x2.5 / tof / head / gt"));
   EXPECT_TRUE(groups.contains("clips x2.5 / structured-light / head / auto"));
   // The same clip gets the same hand shape in every row; different clips differ.
   const auto seedOf = [&](const std::string& clip, const std::string& profile) {
@@ -104,6 +110,8 @@ TEST(MotionSuite, QuickSuiteRunsEndToEnd) {
   ASSERT_NE(continuous, rows.end()) << text;
   EXPECT_EQ(continuous->cuts, 1);
   EXPECT_NE(text.find("animbank segments / tof / desk / auto"), std::string::npos) << text;
+  EXPECT_NE(text.find("held objects: animbank segments / tof / head / gt"), std::string::npos)
+      << text;
 }
 
 }  // namespace

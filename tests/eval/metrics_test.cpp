@@ -37,6 +37,30 @@ TEST(KeypointMetrics, ConstantOffsetGivesThatError) {
   EXPECT_DOUBLE_EQ(m->successFraction[0], 1.0);  // 4 mm < 10 mm on every frame
 }
 
+// Joints left out of the score (hidden behind a held object) count in no error figure.
+TEST(KeypointMetrics, UnscoredJointsAreLeftOut) {
+  SequenceKeypoints s;
+  const Keypoints21 gt = handAt(0);
+  Keypoints21 off = shifted(gt, Vec3(0.002f, 0, 0));  // 2 mm everywhere ...
+  off[4] += Vec3(0.1f, 0, 0);                         // ... and the thumb tip 10 cm more
+  s.groundTruth = {gt, gt};
+  s.predicted = {off, off};
+  std::array<bool, 21> all;
+  all.fill(true);
+  std::array<bool, 21> noThumbTip = all;
+  noThumbTip[4] = false;
+  s.scored = {noThumbTip, all};
+  auto m = computeKeypointMetrics(s);
+  ASSERT_TRUE(m.ok()) << m.message();
+  EXPECT_NEAR(m->perFrameMaxMm[0], 2.0, 1e-3);
+  EXPECT_NEAR(m->perFrameMaxMm[1], 102.0, 1e-2);
+  EXPECT_NEAR(m->perFrameMeanMm[0], 2.0, 1e-3);
+  EXPECT_NEAR(m->perJointMeanMm[4], 102.0, 1e-2);           // scored on frame 1 only
+  EXPECT_NEAR(m->meanMm, (40 * 2.0 + 102.0) / 41.0, 1e-2);  // 20 + 21 joints scored
+  s.scored.pop_back();
+  EXPECT_FALSE(computeKeypointMetrics(s).ok());
+}
+
 TEST(KeypointMetrics, SuccessCurveUsesMaximumJointError) {
   SequenceKeypoints s;
   // Frame 0: one joint 25 mm off; frame 1: all within 5 mm.

@@ -142,6 +142,62 @@ struct CloudPipeline::Impl {
   // The free end (m) of the limb that the coarse volume r, grown from seed, belongs to
   // (LimbEndFinder); false when r is no limb attached to the body.
   bool findLimbEnd(const DepthGrid& grid, int seed, const GrownRegion& r, Vec3& end);
+
+  // One frame's search, shared by run()'s stages.
+  struct Search {
+    DepthGrid coarse;
+    GrownRegion first;                           // region 1's coarse volume
+    int firstSeed = -1;                          // its seed cell
+    int regionCount = 0;                         // coarse volumes accepted: 0, 1 or 2
+    int minI = 0, maxI = 0, minJ = 0, maxJ = 0;  // their cell box
+    Vec3 handEnd = Vec3::Zero();                 // the limb's free end, when haveHandEnd
+    bool haveHandEnd = false;
+    PixelBox box;           // filtered and segmented
+    int stride = 1;         // pixels between working samples
+    int segmentFactor = 1;  // segmentation samples every segmentFactor working samples
+    GrownRegion fineRegion[2];
+    bool fineFound[2] = {false, false};
+  };
+  // Stage 4's running state over the rows of the box.
+  struct Scan {
+    int columns = 0;         // working samples per row of the box
+    int blockOffset = 0;     // each sample stands for the stride x stride block from here (px)
+    int segmentShift = 0;    // 1: segmentation grid at every other working sample
+    int segmentColumns = 0;  // segmentation samples per row
+    const float* segmentGrid = nullptr;
+    float handRadius2 = 0.0f;     // m^2
+    float segmentSpacing = 0.0f;  // m per m of depth between segmentation samples
+    float invFx = 0.0f, invFy = 0.0f;
+    PixelBox segmentBox;
+    int maskPixels = 0;
+    int segmentedSamples = 0;
+    Vec3 segmentedSum = Vec3::Zero();  // m
+  };
+
+  // run()'s stages, in order.
+  void prepareOutput(const DepthFrame& frame, CloudFrame& out);
+  // 1. The closest sufficiently large coarse volume (and a second within the band); false
+  //    when there is none.
+  bool findCoarseRegions(Search& s);
+  // 2. The filter box around the coarse volumes and the working resolution.
+  void chooseBoxAndStride(Search& s) const;
+  // With two regions, each coarse cell's region or a neighbour's (cells are sampled at their
+  // centre, so edges may disagree).
+  void markCoarseNeighbourhood(const Search& s);
+  // 3. Filtering and full-resolution growing on the box, widened while a region reaches a box
+  //    edge that is not an image edge.
+  void segmentFine(const DepthFrame& frame, Search& s, CloudFrame& out);
+  DepthGrid segmentationGrid(const Search& s, const CloudFrame& out);
+  void growFineRegions(Search& s, const DepthGrid& fine);
+  bool widenBox(Search& s, int columns, int rows) const;
+  // 4. Mask, voxel grid and hull points in one scan (row-major: deterministic).
+  Scan scanSegmented(const Search& s, CloudFrame& out);
+  void scanRow(const Search& s, int v, Scan& scan, CloudFrame& out);
+  void emitVoxels(CloudFrame& out);
+  // 5. The segment summary; the arm is where region 1 was cut at the hand radius.
+  void summariseSegment(const Search& s, const Scan& scan, CloudFrame& out) const;
+  // 6. Boundary planes around the segmented pixels.
+  void buildPlanes(const Scan& scan, CloudFrame& out);
   Status run(const DepthFrame& frame, CloudFrame& out);
 };
 
@@ -326,10 +382,9 @@ void CloudPipeline::Impl::sampleCoarse(const DepthFrame& frame, DepthGrid& grid)
   grid.depth = coarseDepth.data();
 }
 
-Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
-  const SegmentationConfig& seg = config.segmentation;
+void CloudPipeline::Impl::prepareOutput(const DepthFrame& frame, CloudFrame& out) {
   const auto pixels = static_cast<std::size_t>(k.width) * k.height;
-  // --- output buffers (allocated on the first frame only) ---
+  // Allocated on the first frame only.
   out.intrinsics = k;
   out.depthScale = frame.depthScale;
   out.minDepthM_ = config.filter.minDepthM;
@@ -341,289 +396,290 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   out.pointWeights.reserve(static_cast<std::size_t>(config.maxVoxels));
   out.pointPixels.reserve(static_cast<std::size_t>(config.maxVoxels));
   out.planes.reserve(static_cast<std::size_t>(config.planes.planeCount));
+}
 
-  // --- 1. coarse search for the closest, sufficiently large volume ---
-  DepthGrid coarse;
-  sampleCoarse(frame, coarse);
-  coarseGrower.reset(coarse, k);
-  // A coarse volume can fail at full resolution (e.g. a speckle cluster whose coarse area
-  // was overestimated): it is retired and the search goes on with the next candidate.
-  GrownRegion fineRegion[2];
-  bool fineFound[2] = {false, false};
-  PixelBox box;
-  int stride = 1;
-  int segmentFactor = 1;  // segmentation samples every segmentFactor working samples
-  int regionCount = 0;
-  Vec3 handEnd = Vec3::Zero();
-  bool haveHandEnd = false;
-  for (int round = 0; round < kCandidateRounds && !fineFound[0]; ++round) {
-    // The coarse ball is wider than the hand radius: the full-resolution nearest point
-    // (the final ball's centre) differs from the coarse one by up to a few cm, and the
-    // filter box must hold the whole final region.
-    const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
-    regionCount = 0;
-    GrownRegion first;
-    // Nearest-first; a candidate at the image border is remembered and passed over (see
-    // SegmentationConfig::borderMarginPixels), and used when nothing better follows.
-    int borderSeed = -1;
-    float borderDepth = 0.0f;
-    int firstSeed = -1;
-    int attempts = 0;
-    while (regionCount == 0 && attempts++ < seg.maxSeedAttempts) {
-      const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
-      const int seed = coarseGrower.nearestFreeCell(depthLimit);
+bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
+  const SegmentationConfig& seg = config.segmentation;
+  // The coarse ball is wider than the hand radius: the full-resolution nearest point (the
+  // final ball's centre) differs from the coarse one by up to a few cm, and the filter box
+  // must hold the whole final region.
+  const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
+  s.regionCount = 0;
+  s.first = GrownRegion{};
+  s.firstSeed = -1;
+  // Nearest-first; a candidate at the image border is remembered and passed over (see
+  // SegmentationConfig::borderMarginPixels), and used when nothing better follows.
+  int borderSeed = -1;
+  float borderDepth = 0.0f;
+  int attempts = 0;
+  while (s.regionCount == 0 && attempts++ < seg.maxSeedAttempts) {
+    const float depthLimit = borderSeed >= 0 ? borderDepth + seg.borderPreferenceDepthM : 0.0f;
+    const int seed = coarseGrower.nearestFreeCell(depthLimit);
+    if (seed < 0) break;
+    const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
+    if (r.areaM2 < seg.minAreaM2 || r.inFrontOfSurface) {
+      coarseGrower.reject();
+      continue;
+    }
+    // Every volume at the border is passed over (a table or wall reaching the border nearer
+    // than the hand, below an arm that does too); the nearest of them is kept.
+    if (atBorder(s.coarse, r)) {
+      if (borderSeed < 0) {
+        borderSeed = seed;
+        borderDepth = r.nearestPoint.z();
+      }
+      coarseGrower.reject();
+      continue;
+    }
+    coarseGrower.accept(cloud::kRegion1);
+    s.first = r;
+    s.firstSeed = seed;
+    s.regionCount = 1;
+  }
+  if (s.regionCount == 0 && borderSeed >= 0) {
+    coarseGrower.reset(s.coarse, k);  // forget the passed-over labels
+    s.first = coarseGrower.grow(borderSeed, seg.step, coarseRadius, seg.minAreaM2);
+    coarseGrower.accept(cloud::kRegion1);
+    s.firstSeed = borderSeed;
+    s.regionCount = 1;
+  }
+  if (s.regionCount == 0) return false;
+  s.haveHandEnd = findLimbEnd(s.coarse, s.firstSeed, s.first, s.handEnd);
+  s.minI = s.first.minI;
+  s.maxI = s.first.maxI;
+  s.minJ = s.first.minJ;
+  s.maxJ = s.first.maxJ;
+  if (seg.secondRegionDepthBandM > 0.0f) {
+    attempts = 0;
+    while (s.regionCount == 1 && attempts++ < seg.maxSeedAttempts) {
+      const int seed =
+          coarseGrower.nearestFreeCell(s.first.nearestPoint.z() + seg.secondRegionDepthBandM,
+                                       &s.first.nearestPoint, coarseRadius);
       if (seed < 0) break;
       const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
-      if (r.areaM2 < seg.minAreaM2 || r.inFrontOfSurface) {
+      if (r.areaM2 >= seg.minAreaM2 && !r.inFrontOfSurface && !r.touchesEarlierRegion) {
+        coarseGrower.accept(cloud::kRegion2);
+        s.regionCount = 2;
+        s.minI = std::min(s.minI, r.minI);
+        s.maxI = std::max(s.maxI, r.maxI);
+        s.minJ = std::min(s.minJ, r.minJ);
+        s.maxJ = std::max(s.maxJ, r.maxJ);
+      } else {
         coarseGrower.reject();
-        continue;
-      }
-      // Every volume at the border is passed over (a table or wall reaching the border nearer
-      // than the hand, below an arm that does too); the nearest of them is kept.
-      if (atBorder(coarse, r)) {
-        if (borderSeed < 0) {
-          borderSeed = seed;
-          borderDepth = r.nearestPoint.z();
-        }
-        coarseGrower.reject();
-        continue;
-      }
-      coarseGrower.accept(cloud::kRegion1);
-      first = r;
-      firstSeed = seed;
-      regionCount = 1;
-    }
-    if (regionCount == 0 && borderSeed >= 0) {
-      coarseGrower.reset(coarse, k);  // forget the passed-over labels
-      first = coarseGrower.grow(borderSeed, seg.step, coarseRadius, seg.minAreaM2);
-      coarseGrower.accept(cloud::kRegion1);
-      firstSeed = borderSeed;
-      regionCount = 1;
-    }
-    if (regionCount == 0) return Ok{};  // no hand: valid, empty
-    haveHandEnd = findLimbEnd(coarse, firstSeed, first, handEnd);
-    int minI = first.minI, maxI = first.maxI, minJ = first.minJ, maxJ = first.maxJ;
-    if (seg.secondRegionDepthBandM > 0.0f) {
-      attempts = 0;
-      while (regionCount == 1 && attempts++ < seg.maxSeedAttempts) {
-        const int seed = coarseGrower.nearestFreeCell(
-            first.nearestPoint.z() + seg.secondRegionDepthBandM, &first.nearestPoint, coarseRadius);
-        if (seed < 0) break;
-        const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
-        if (r.areaM2 >= seg.minAreaM2 && !r.inFrontOfSurface && !r.touchesEarlierRegion) {
-          coarseGrower.accept(cloud::kRegion2);
-          regionCount = 2;
-          minI = std::min(minI, r.minI);
-          maxI = std::max(maxI, r.maxI);
-          minJ = std::min(minJ, r.minJ);
-          maxJ = std::max(maxJ, r.maxJ);
-        } else {
-          coarseGrower.reject();
-        }
       }
     }
-
-    // --- 2. filter only the box around the coarse regions ---
-    // Margin: a coarse cell covers step pixels; the median and flying-pixel tests need one
-    // more pixel each.
-    const int step = coarse.step;
-    const int margin = 2 * step + 2;
-    box.x0 = std::max(0, coarse.originU + minI * step - margin);
-    box.y0 = std::max(0, coarse.originV + minJ * step - margin);
-    box.x1 = std::min(k.width, coarse.originU + maxI * step + margin + 1);
-    box.y1 = std::min(k.height, coarse.originV + maxJ * step + margin + 1);
-
-    // Working resolution: samples no closer than half a voxel at the hand's depth.
-    const float pixelPitch = first.nearestPoint.z() / std::min(k.fx, k.fy);  // m
-    stride = config.sampleStride;
-    if (stride <= 0) {
-      stride = std::clamp(static_cast<int>(0.5f * config.voxelSizeM / pixelPitch), 1, 4);
-    }
-    // Region growing costs per sample and needs fewer of them than the voxels: with growStep
-    // 2, at stride 1 it takes every other sample while those stay within one voxel of each
-    // other (a finger is then still >= 3 samples wide). The voxels take every working sample.
-    segmentFactor =
-        seg.growStep == 2 && stride == 1 && 2.0f * pixelPitch <= config.voxelSizeM ? 2 : 1;
-    const int segmentStride = stride * segmentFactor;
-
-    // --- 3. full-resolution segmentation, seeded inside each coarse region ---
-    // With two regions, each pixel knows which coarse region its cell (or a neighbouring
-    // cell: cells are sampled at their centre, so edges may disagree) belongs to.
-    const bool twoRegions = regionCount == 2;
-    if (twoRegions) {
-      const std::vector<std::uint8_t>& coarseLabels = coarseGrower.labels();
-      coarseNear.assign(coarseLabels.size(), 0);
-      for (int j = 0; j < coarse.height; ++j) {
-        for (int i = 0; i < coarse.width; ++i) {
-          const std::uint8_t label = coarseLabels[static_cast<std::size_t>(j) * coarse.width + i];
-          if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
-          for (int dj = std::max(0, j - 1); dj <= std::min(coarse.height - 1, j + 1); ++dj) {
-            for (int di = std::max(0, i - 1); di <= std::min(coarse.width - 1, i + 1); ++di) {
-              std::uint8_t& near = coarseNear[static_cast<std::size_t>(dj) * coarse.width + di];
-              if (near == 0) near = label;
-            }
-          }
-        }
-      }
-    }
-    // Filtering and growing run on the box; a region that reaches a box edge (not an
-    // image edge) was cut by the box, so the box is widened and the pass repeated.
-    for (int pass = 0;; ++pass) {
-      out.filterBox = box;
-      cloud::filterBox(frame, box, stride, config.filter, seg.step, k.fx, k.fy, filterScratch,
-                       out.filteredDepthM);
-
-      // The segmentation grid: the working samples, or every other one of them.
-      const int bw = cloud::samplesAlong(box.width(), segmentStride);
-      const int bh = cloud::samplesAlong(box.height(), segmentStride);
-      const float* segmentGrid = out.filteredDepthM.data();
-      if (segmentFactor > 1) {
-        const int workingColumns = cloud::samplesAlong(box.width(), stride);
-        segmentDepth.resize(static_cast<std::size_t>(bw) * bh);
-        for (int v = 0; v < bh; ++v) {
-          const float* src = out.filteredDepthM.data() +
-                             static_cast<std::size_t>(v * segmentFactor) * workingColumns;
-          float* dst = segmentDepth.data() + static_cast<std::size_t>(v) * bw;
-          for (int u = 0; u < bw; ++u) dst[u] = src[u * segmentFactor];
-        }
-        segmentGrid = segmentDepth.data();
-      }
-      // Coarse cell column / row of each box column / row.
-      boxColumnCell.resize(static_cast<std::size_t>(bw));
-      boxRowCell.resize(static_cast<std::size_t>(bh));
-      for (int u = 0; u < bw; ++u) {
-        boxColumnCell[static_cast<std::size_t>(u)] =
-            std::min(coarse.width - 1, (box.x0 + u * segmentStride) / step);
-      }
-      for (int v = 0; v < bh; ++v) {
-        boxRowCell[static_cast<std::size_t>(v)] =
-            std::min(coarse.height - 1, (box.y0 + v * segmentStride) / step);
-      }
-
-      DepthGrid fine;
-      fine.depth = segmentGrid;
-      fine.width = bw;
-      fine.height = bh;
-      fine.originU = box.x0;
-      fine.originV = box.y0;
-      fine.step = segmentStride;
-      fineGrower.reset(fine, k);
-      fragments.clear();
-      fragmentCells.clear();
-      fineFound[0] = fineFound[1] = false;
-      // The coarse pass accepted these volumes; at full resolution a filtered speck may still
-      // be nearest (e.g. a fingertip in front of the palm), so small regions are skipped too.
-      for (int r = 0; r < regionCount; ++r) {
-        const auto label = static_cast<std::uint8_t>(r == 0 ? cloud::kRegion1 : cloud::kRegion2);
-        attempts = 0;
-        while (!fineFound[r] && attempts++ < seg.maxSeedAttempts) {
-          // Region 1 may start anywhere in the box but in region 2's cells: when its coarse
-          // volume splits at full resolution (a fingertip in front of the palm), the palm
-          // beside it is still the nearest large volume. Region 2 starts in its own cells.
-          const int seed =
-              !twoRegions
-                  ? fineGrower.nearestFreeCell()
-                  : fineGrower.nearestFreeCellWhere([&](int u, int v) {
-                      const std::uint8_t coarseLabel = coarseNear
-                          [static_cast<std::size_t>(boxRowCell[static_cast<std::size_t>(v)]) *
-                               coarse.width +
-                           static_cast<std::size_t>(boxColumnCell[static_cast<std::size_t>(u)])];
-                      return label == cloud::kRegion1 ? coarseLabel != cloud::kRegion2
-                                                      : coarseLabel == cloud::kRegion2;
-                    });
-          if (seed < 0) break;
-          GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
-          const Vec3 toNearest = g.nearestPoint - handEnd;
-          if (r == 0 && haveHandEnd && toNearest.norm() > seg.handRadiusM) {
-            // The ball around the nearest sample leaves out the limb's free end: that sample
-            // is on a forearm pointing at the camera. The ball moves toward the free end
-            // until it holds it with a quarter radius to spare.
-            const Vec3 centre =
-                handEnd + toNearest.normalized() * (kEndInsideBall * seg.handRadiusM);
-            const int endSeed = fineGrower.closestFreeCell(centre);
-            if (endSeed >= 0)
-              g = fineGrower.grow(endSeed, seg.step, seg.handRadiusM, seg.minAreaM2);
-          }
-          if (g.areaM2 >= seg.minAreaM2 && !g.inFrontOfSurface) {
-            fineGrower.accept(static_cast<CellLabel>(label));
-            fineRegion[r] = g;
-            fineFound[r] = true;
-            // Pieces passed over as too small that lie within this volume's ball, in front
-            // of it or about as near: a hand broken up by missing data (fingers seen edge-on
-            // with a structured-light camera), whose pieces belong to it.
-            if (r == 0 && !twoRegions) {
-              for (const Fragment& f : fragments) {
-                if (!joins(f, g.nearestPoint, kFragmentDepthM)) continue;
-                // Only its cells within the region's ball (the hand-radius rule), and only
-                // those not in the region already (it may have grown into the piece).
-                GrownRegion& taken = fineRegion[r];
-                taken.areaM2 += fineGrower.labelCellsWithin(
-                    fragmentCells.data() + f.begin, f.end - f.begin, static_cast<CellLabel>(label),
-                    g.nearestPoint, seg.handRadiusM);
-                includeBox(taken, f.region);  // a piece cut by the box widens it
-              }
-            }
-          } else {
-            // Recorded only while it fits the reserved buffers (no allocation per frame).
-            bool piece = r == 0 && !twoRegions && !g.inFrontOfSurface &&
-                         fragments.size() < fragments.capacity();
-            if (piece) {
-              Fragment f{g, fragmentCells.size(), 0};
-              piece = fineGrower.appendLastRegion(fragmentCells);
-              f.end = fragmentCells.size();
-              if (piece) fragments.push_back(f);
-            }
-            fineGrower.reject();
-            // Pieces that together make a volume are taken as one (mergePieces).
-            if (piece && mergePieces(static_cast<CellLabel>(label), fineRegion[r]))
-              fineFound[r] = true;
-          }
-        }
-      }
-      if (pass == kMaxBoxRetries || !fineFound[0]) break;
-      const int extra = std::max(box.width(), box.height()) / 2;
-      PixelBox wider = box;
-      for (int r = 0; r < 2; ++r) {
-        if (!fineFound[r]) continue;
-        const GrownRegion& g = fineRegion[r];
-        if (g.minI == 0 && box.x0 > 0) wider.x0 = std::max(0, box.x0 - extra);
-        if (g.minJ == 0 && box.y0 > 0) wider.y0 = std::max(0, box.y0 - extra);
-        if (g.maxI == bw - 1 && box.x1 < k.width) wider.x1 = std::min(k.width, box.x1 + extra);
-        if (g.maxJ == bh - 1 && box.y1 < k.height) wider.y1 = std::min(k.height, box.y1 + extra);
-      }
-      if (wider.x0 == box.x0 && wider.y0 == box.y0 && wider.x1 == box.x1 && wider.y1 == box.y1) {
-        break;
-      }
-      box = wider;
-    }
-    if (!fineFound[0]) coarseGrower.retireAccepted();
   }
-  if (!fineFound[0]) return Ok{};
-  const int bw = cloud::samplesAlong(box.width(), stride);
-  const int bh = cloud::samplesAlong(box.height(), stride);
-  out.filterStride = stride;
-  out.filterColumns = bw;
-  out.filterRows = bh;
+  return true;
+}
 
-  // --- 4. mask, voxel grid and hull points in one scan (row-major: deterministic) ---
-  voxels.clear();
-  hullPoints.clear();
-  const std::vector<std::uint8_t>& fineLabels = fineGrower.labels();
-  const float invFx = 1.0f / k.fx;
-  const float invFy = 1.0f / k.fy;
-  // Each sample stands for the stride x stride pixel block around it (offset stride / 2).
-  const int blockOffset = stride / 2;
-  PixelBox segBox{k.width, k.height, 0, 0};
-  int maskPixels = 0;
-  int segmentedSamples = 0;
-  Vec3 segmentedSum = Vec3::Zero();  // m
-  boxColumnX.resize(static_cast<std::size_t>(bw));
+void CloudPipeline::Impl::chooseBoxAndStride(Search& s) const {
+  // Margin: a coarse cell covers step pixels; the median and flying-pixel tests need one
+  // more pixel each.
+  const DepthGrid& coarse = s.coarse;
+  const int step = coarse.step;
+  const int margin = 2 * step + 2;
+  s.box.x0 = std::max(0, coarse.originU + s.minI * step - margin);
+  s.box.y0 = std::max(0, coarse.originV + s.minJ * step - margin);
+  s.box.x1 = std::min(k.width, coarse.originU + s.maxI * step + margin + 1);
+  s.box.y1 = std::min(k.height, coarse.originV + s.maxJ * step + margin + 1);
+
+  // Working resolution: samples no closer than half a voxel at the hand's depth.
+  const float pixelPitch = s.first.nearestPoint.z() / std::min(k.fx, k.fy);  // m
+  s.stride = config.sampleStride;
+  if (s.stride <= 0)
+    s.stride = std::clamp(static_cast<int>(0.5f * config.voxelSizeM / pixelPitch), 1, 4);
+  // Region growing costs per sample and needs fewer of them than the voxels: with growStep
+  // 2, at stride 1 it takes every other sample while those stay within one voxel of each
+  // other (a finger is then still >= 3 samples wide). The voxels take every working sample.
+  s.segmentFactor =
+      config.segmentation.growStep == 2 && s.stride == 1 && 2.0f * pixelPitch <= config.voxelSizeM
+          ? 2
+          : 1;
+}
+
+void CloudPipeline::Impl::markCoarseNeighbourhood(const Search& s) {
+  const DepthGrid& coarse = s.coarse;
+  const std::vector<std::uint8_t>& coarseLabels = coarseGrower.labels();
+  coarseNear.assign(coarseLabels.size(), 0);
+  for (int j = 0; j < coarse.height; ++j) {
+    for (int i = 0; i < coarse.width; ++i) {
+      const std::uint8_t label = coarseLabels[static_cast<std::size_t>(j) * coarse.width + i];
+      if (label != cloud::kRegion1 && label != cloud::kRegion2) continue;
+      for (int dj = std::max(0, j - 1); dj <= std::min(coarse.height - 1, j + 1); ++dj) {
+        for (int di = std::max(0, i - 1); di <= std::min(coarse.width - 1, i + 1); ++di) {
+          std::uint8_t& near = coarseNear[static_cast<std::size_t>(dj) * coarse.width + di];
+          if (near == 0) near = label;
+        }
+      }
+    }
+  }
+}
+
+DepthGrid CloudPipeline::Impl::segmentationGrid(const Search& s, const CloudFrame& out) {
+  const PixelBox& box = s.box;
+  const int segmentStride = s.stride * s.segmentFactor;
+  // The segmentation grid: the working samples, or every other one of them.
+  const int bw = cloud::samplesAlong(box.width(), segmentStride);
+  const int bh = cloud::samplesAlong(box.height(), segmentStride);
+  const float* grid = out.filteredDepthM.data();
+  if (s.segmentFactor > 1) {
+    const int workingColumns = cloud::samplesAlong(box.width(), s.stride);
+    segmentDepth.resize(static_cast<std::size_t>(bw) * bh);
+    for (int v = 0; v < bh; ++v) {
+      const float* src = out.filteredDepthM.data() +
+                         static_cast<std::size_t>(v * s.segmentFactor) * workingColumns;
+      float* dst = segmentDepth.data() + static_cast<std::size_t>(v) * bw;
+      for (int u = 0; u < bw; ++u) dst[u] = src[u * s.segmentFactor];
+    }
+    grid = segmentDepth.data();
+  }
+  // Coarse cell column / row of each box column / row.
+  const int step = s.coarse.step;
+  boxColumnCell.resize(static_cast<std::size_t>(bw));
+  boxRowCell.resize(static_cast<std::size_t>(bh));
   for (int u = 0; u < bw; ++u) {
-    boxColumnX[static_cast<std::size_t>(u)] =
-        (static_cast<float>(box.x0 + u * stride) - k.cx) * invFx;
+    boxColumnCell[static_cast<std::size_t>(u)] =
+        std::min(s.coarse.width - 1, (box.x0 + u * segmentStride) / step);
   }
-  rowKeys.resize(static_cast<std::size_t>(bw));
-  columnVoxel.assign(static_cast<std::size_t>(bw), -1);
+  for (int v = 0; v < bh; ++v) {
+    boxRowCell[static_cast<std::size_t>(v)] =
+        std::min(s.coarse.height - 1, (box.y0 + v * segmentStride) / step);
+  }
+  DepthGrid fine;
+  fine.depth = grid;
+  fine.width = bw;
+  fine.height = bh;
+  fine.originU = box.x0;
+  fine.originV = box.y0;
+  fine.step = segmentStride;
+  return fine;
+}
+
+void CloudPipeline::Impl::growFineRegions(Search& s, const DepthGrid& fine) {
+  const SegmentationConfig& seg = config.segmentation;
+  const bool twoRegions = s.regionCount == 2;
+  fineGrower.reset(fine, k);
+  fragments.clear();
+  fragmentCells.clear();
+  s.fineFound[0] = s.fineFound[1] = false;
+  // The coarse pass accepted these volumes; at full resolution a filtered speck may still be
+  // nearest (e.g. a fingertip in front of the palm), so small regions are skipped too.
+  for (int r = 0; r < s.regionCount; ++r) {
+    const auto label = static_cast<std::uint8_t>(r == 0 ? cloud::kRegion1 : cloud::kRegion2);
+    int attempts = 0;
+    while (!s.fineFound[r] && attempts++ < seg.maxSeedAttempts) {
+      // Region 1 may start anywhere in the box but in region 2's cells: when its coarse
+      // volume splits at full resolution (a fingertip in front of the palm), the palm beside
+      // it is still the nearest large volume. Region 2 starts in its own cells.
+      const int seed =
+          !twoRegions
+              ? fineGrower.nearestFreeCell()
+              : fineGrower.nearestFreeCellWhere([&](int u, int v) {
+                  const std::uint8_t coarseLabel =
+                      coarseNear[static_cast<std::size_t>(boxRowCell[static_cast<std::size_t>(v)]) *
+                                     s.coarse.width +
+                                 static_cast<std::size_t>(
+                                     boxColumnCell[static_cast<std::size_t>(u)])];
+                  return label == cloud::kRegion1 ? coarseLabel != cloud::kRegion2
+                                                  : coarseLabel == cloud::kRegion2;
+                });
+      if (seed < 0) break;
+      GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
+      const Vec3 toNearest = g.nearestPoint - s.handEnd;
+      if (r == 0 && s.haveHandEnd && toNearest.norm() > seg.handRadiusM) {
+        // The ball around the nearest sample leaves out the limb's free end: that sample is
+        // on a forearm pointing at the camera. The ball moves toward the free end until it
+        // holds it with a quarter radius to spare.
+        const Vec3 centre = s.handEnd + toNearest.normalized() * (kEndInsideBall * seg.handRadiusM);
+        const int endSeed = fineGrower.closestFreeCell(centre);
+        if (endSeed >= 0) g = fineGrower.grow(endSeed, seg.step, seg.handRadiusM, seg.minAreaM2);
+      }
+      if (g.areaM2 >= seg.minAreaM2 && !g.inFrontOfSurface) {
+        fineGrower.accept(static_cast<CellLabel>(label));
+        s.fineRegion[r] = g;
+        s.fineFound[r] = true;
+        // Pieces passed over as too small that lie within this volume's ball, in front of it
+        // or about as near: a hand broken up by missing data (fingers seen edge-on with a
+        // structured-light camera), whose pieces belong to it.
+        if (r == 0 && !twoRegions) {
+          for (const Fragment& f : fragments) {
+            if (!joins(f, g.nearestPoint, kFragmentDepthM)) continue;
+            // Only its cells within the region's ball (the hand-radius rule), and only those
+            // not in the region already (it may have grown into the piece).
+            GrownRegion& taken = s.fineRegion[r];
+            taken.areaM2 += fineGrower.labelCellsWithin(
+                fragmentCells.data() + f.begin, f.end - f.begin, static_cast<CellLabel>(label),
+                g.nearestPoint, seg.handRadiusM);
+            includeBox(taken, f.region);  // a piece cut by the box widens it
+          }
+        }
+      } else {
+        // Recorded only while it fits the reserved buffers (no allocation per frame).
+        bool piece =
+            r == 0 && !twoRegions && !g.inFrontOfSurface && fragments.size() < fragments.capacity();
+        if (piece) {
+          Fragment f{g, fragmentCells.size(), 0};
+          piece = fineGrower.appendLastRegion(fragmentCells);
+          f.end = fragmentCells.size();
+          if (piece) fragments.push_back(f);
+        }
+        fineGrower.reject();
+        // Pieces that together make a volume are taken as one (mergePieces).
+        if (piece && mergePieces(static_cast<CellLabel>(label), s.fineRegion[r]))
+          s.fineFound[r] = true;
+      }
+    }
+  }
+}
+
+bool CloudPipeline::Impl::widenBox(Search& s, int columns, int rows) const {
+  PixelBox& box = s.box;
+  const int extra = std::max(box.width(), box.height()) / 2;
+  PixelBox wider = box;
+  for (int r = 0; r < 2; ++r) {
+    if (!s.fineFound[r]) continue;
+    const GrownRegion& g = s.fineRegion[r];
+    if (g.minI == 0 && box.x0 > 0) wider.x0 = std::max(0, box.x0 - extra);
+    if (g.minJ == 0 && box.y0 > 0) wider.y0 = std::max(0, box.y0 - extra);
+    if (g.maxI == columns - 1 && box.x1 < k.width) wider.x1 = std::min(k.width, box.x1 + extra);
+    if (g.maxJ == rows - 1 && box.y1 < k.height) wider.y1 = std::min(k.height, box.y1 + extra);
+  }
+  if (wider.x0 == box.x0 && wider.y0 == box.y0 && wider.x1 == box.x1 && wider.y1 == box.y1)
+    return false;
+  box = wider;
+  return true;
+}
+
+void CloudPipeline::Impl::segmentFine(const DepthFrame& frame, Search& s, CloudFrame& out) {
+  for (int pass = 0;; ++pass) {
+    out.filterBox = s.box;
+    cloud::filterBox(frame, s.box, s.stride, config.filter, config.segmentation.step, k.fx, k.fy,
+                     filterScratch, out.filteredDepthM);
+    const DepthGrid fine = segmentationGrid(s, out);
+    growFineRegions(s, fine);
+    if (pass == kMaxBoxRetries || !s.fineFound[0]) break;
+    if (!widenBox(s, fine.width, fine.height)) break;
+  }
+}
+
+void CloudPipeline::Impl::scanRow(const Search& s, int v, Scan& scan, CloudFrame& out) {
+  const SegmentationConfig& seg = config.segmentation;
+  const PixelBox& box = s.box;
+  const int stride = s.stride;
+  const int bw = scan.columns;
+  const int pv = box.y0 + v * stride;
+  const std::size_t segmentRow =
+      static_cast<std::size_t>(v >> scan.segmentShift) * scan.segmentColumns;
+  const std::uint8_t* labelRow = fineGrower.labels().data() + segmentRow;
+  const float* segmentDepthRow = scan.segmentGrid + segmentRow;
+  const bool segmentSampleRow = (v & scan.segmentShift) == 0;
+  const float* depthRow = out.filteredDepthM.data() + static_cast<std::size_t>(v) * bw;
+  const int blockV0 = std::max(0, pv - scan.blockOffset);
+  const int blockV1 = std::min(k.height, pv - scan.blockOffset + stride);
+  const float ny = (static_cast<float>(pv) - k.cy) * scan.invFy;
+  int rowMin = -1;
+  int rowMax = -1;
+  voxels.keysOfRow(boxColumnX.data(), ny, depthRow, bw, rowKeys.data());
   // Voxels are met in runs along a row: a run's points are summed here and added at once.
   // The run's first column usually held the same voxel one row up: that voxel is the hint
   // that spares the voxel table's lookup (cache misses).
@@ -636,84 +692,103 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
     std::fill(columnVoxel.begin() + runBegin, columnVoxel.begin() + runEnd, run.voxel);
     runOpen = false;
   };
+  // Segmented samples [spanBegin, u) in a row: their blocks make one pixel span.
+  int spanBegin = -1;
+  const auto closeSpan = [&](int spanEnd) {
+    const int pixel0 = std::max(0, box.x0 + spanBegin * stride - scan.blockOffset);
+    const int pixel1 =
+        std::min(k.width, box.x0 + (spanEnd - 1) * stride - scan.blockOffset + stride);
+    for (int mv = blockV0; mv < blockV1; ++mv) {
+      std::uint8_t* maskRow = out.mask.data() + static_cast<std::size_t>(mv) * k.width;
+      std::fill(maskRow + pixel0, maskRow + pixel1, std::uint8_t{1});
+    }
+    scan.maskPixels += (blockV1 - blockV0) * (pixel1 - pixel0);
+    spanBegin = -1;
+  };
+  for (int u = 0; u < bw; ++u) {
+    const std::uint8_t label = labelRow[u >> scan.segmentShift];
+    const float z = depthRow[u];
+    bool segmented = label == cloud::kRegion1 || label == cloud::kRegion2;
+    if (segmented && !(segmentSampleRow && (u & scan.segmentShift) == 0)) {
+      const float zs = segmentDepthRow[u >> scan.segmentShift];
+      const Vec3 p(boxColumnX[static_cast<std::size_t>(u)] * z, ny * z, z);
+      segmented = z > 0.0f &&
+                  std::fabs(z - zs) <= cloud::maxDepthStep(seg.step, zs, scan.segmentSpacing) &&
+                  (p - s.fineRegion[label - 1].nearestPoint).squaredNorm() <= scan.handRadius2;
+    }
+    if (!segmented) {
+      if (spanBegin >= 0) closeSpan(u);
+      continue;
+    }
+    if (spanBegin < 0) spanBegin = u;
+    ++scan.segmentedSamples;
+    const int pu = box.x0 + u * stride;
+    const Vec3 p(boxColumnX[static_cast<std::size_t>(u)] * z, ny * z, z);
+    const VoxelGrid::Key key = rowKeys[static_cast<std::size_t>(u)];
+    scan.segmentedSum += p;
+    if (!runOpen || key != run.key) {
+      if (runOpen) closeRun();
+      run = voxels.beginRun(key, pv * k.width + pu, columnVoxel[static_cast<std::size_t>(u)]);
+      runOpen = true;
+      runBegin = u;
+    }
+    VoxelGrid::addToRun(run, p);
+    runEnd = u + 1;
+    if (rowMin < 0) rowMin = pu;
+    rowMax = pu;
+  }
+  if (spanBegin >= 0) closeSpan(bw);
+  if (runOpen) closeRun();  // runs end with the row: their columns are in it
+  if (rowMin < 0) return;
+  hullPoints.emplace_back((static_cast<float>(rowMin) - k.cx) * scan.invFx, ny);
+  if (rowMax != rowMin)
+    hullPoints.emplace_back((static_cast<float>(rowMax) - k.cx) * scan.invFx, ny);
+  PixelBox& segBox = scan.segmentBox;
+  segBox.x0 = std::min(segBox.x0, std::max(0, rowMin - scan.blockOffset));
+  segBox.x1 = std::max(segBox.x1, std::min(k.width, rowMax - scan.blockOffset + stride));
+  segBox.y0 = std::min(segBox.y0, blockV0);
+  segBox.y1 = blockV1;
+}
+
+CloudPipeline::Impl::Scan CloudPipeline::Impl::scanSegmented(const Search& s, CloudFrame& out) {
+  const SegmentationConfig& seg = config.segmentation;
+  const int stride = s.stride;
+  const int bw = cloud::samplesAlong(s.box.width(), stride);
+  const int bh = cloud::samplesAlong(s.box.height(), stride);
+  out.filterStride = stride;
+  out.filterColumns = bw;
+  out.filterRows = bh;
+  voxels.clear();
+  hullPoints.clear();
+  Scan scan;
+  scan.columns = bw;
+  scan.invFx = 1.0f / k.fx;
+  scan.invFy = 1.0f / k.fy;
+  // Each sample stands for the stride x stride pixel block around it (offset stride / 2).
+  scan.blockOffset = stride / 2;
+  scan.segmentBox = PixelBox{k.width, k.height, 0, 0};
+  boxColumnX.resize(static_cast<std::size_t>(bw));
+  for (int u = 0; u < bw; ++u) {
+    boxColumnX[static_cast<std::size_t>(u)] =
+        (static_cast<float>(s.box.x0 + u * stride) - k.cx) * scan.invFx;
+  }
+  rowKeys.resize(static_cast<std::size_t>(bw));
+  columnVoxel.assign(static_cast<std::size_t>(bw), -1);
   // With segmentFactor 2 a working sample takes the label of the segmentation sample at the
   // top left of its 2 x 2 group when it lies on the same surface (the step rule between
   // segmentation neighbours): silhouette edges stay at the working resolution.
-  const int segmentShift = segmentFactor == 2 ? 1 : 0;
-  const int segmentColumns = cloud::samplesAlong(box.width(), stride * segmentFactor);
-  const float* segmentGrid = segmentFactor == 2 ? segmentDepth.data() : out.filteredDepthM.data();
-  const float handRadius2 = seg.handRadiusM * seg.handRadiusM;
-  const float segmentSpacing =
-      static_cast<float>(stride * segmentFactor) / std::min(k.fx, k.fy);  // m per m of depth
-  for (int v = 0; v < bh; ++v) {
-    const int pv = box.y0 + v * stride;
-    const std::size_t segmentRow = static_cast<std::size_t>(v >> segmentShift) * segmentColumns;
-    const std::uint8_t* labelRow = fineLabels.data() + segmentRow;
-    const float* segmentDepthRow = segmentGrid + segmentRow;
-    const bool segmentSampleRow = (v & segmentShift) == 0;
-    const float* depthRow = out.filteredDepthM.data() + static_cast<std::size_t>(v) * bw;
-    const int blockV0 = std::max(0, pv - blockOffset);
-    const int blockV1 = std::min(k.height, pv - blockOffset + stride);
-    const float ny = (static_cast<float>(pv) - k.cy) * invFy;
-    int rowMin = -1;
-    int rowMax = -1;
-    voxels.keysOfRow(boxColumnX.data(), ny, depthRow, bw, rowKeys.data());
-    // Segmented samples [spanBegin, u) in a row: their blocks make one pixel span.
-    int spanBegin = -1;
-    const auto closeSpan = [&](int spanEnd) {
-      const int pixel0 = std::max(0, box.x0 + spanBegin * stride - blockOffset);
-      const int pixel1 = std::min(k.width, box.x0 + (spanEnd - 1) * stride - blockOffset + stride);
-      for (int mv = blockV0; mv < blockV1; ++mv) {
-        std::uint8_t* maskRow = out.mask.data() + static_cast<std::size_t>(mv) * k.width;
-        std::fill(maskRow + pixel0, maskRow + pixel1, std::uint8_t{1});
-      }
-      maskPixels += (blockV1 - blockV0) * (pixel1 - pixel0);
-      spanBegin = -1;
-    };
-    for (int u = 0; u < bw; ++u) {
-      const std::uint8_t label = labelRow[u >> segmentShift];
-      const float z = depthRow[u];
-      bool segmented = label == cloud::kRegion1 || label == cloud::kRegion2;
-      if (segmented && !(segmentSampleRow && (u & segmentShift) == 0)) {
-        const float zs = segmentDepthRow[u >> segmentShift];
-        const Vec3 p(boxColumnX[static_cast<std::size_t>(u)] * z, ny * z, z);
-        segmented = z > 0.0f &&
-                    std::fabs(z - zs) <= cloud::maxDepthStep(seg.step, zs, segmentSpacing) &&
-                    (p - fineRegion[label - 1].nearestPoint).squaredNorm() <= handRadius2;
-      }
-      if (!segmented) {
-        if (spanBegin >= 0) closeSpan(u);
-        continue;
-      }
-      if (spanBegin < 0) spanBegin = u;
-      ++segmentedSamples;
-      const int pu = box.x0 + u * stride;
-      const Vec3 p(boxColumnX[static_cast<std::size_t>(u)] * z, ny * z, z);
-      const VoxelGrid::Key key = rowKeys[static_cast<std::size_t>(u)];
-      segmentedSum += p;
-      if (!runOpen || key != run.key) {
-        if (runOpen) closeRun();
-        run = voxels.beginRun(key, pv * k.width + pu, columnVoxel[static_cast<std::size_t>(u)]);
-        runOpen = true;
-        runBegin = u;
-      }
-      VoxelGrid::addToRun(run, p);
-      runEnd = u + 1;
-      if (rowMin < 0) rowMin = pu;
-      rowMax = pu;
-    }
-    if (spanBegin >= 0) closeSpan(bw);
-    if (runOpen) closeRun();  // runs end with the row: their columns are in it
-    if (rowMin < 0) continue;
-    hullPoints.emplace_back((static_cast<float>(rowMin) - k.cx) * invFx, ny);
-    if (rowMax != rowMin) hullPoints.emplace_back((static_cast<float>(rowMax) - k.cx) * invFx, ny);
-    segBox.x0 = std::min(segBox.x0, std::max(0, rowMin - blockOffset));
-    segBox.x1 = std::max(segBox.x1, std::min(k.width, rowMax - blockOffset + stride));
-    segBox.y0 = std::min(segBox.y0, blockV0);
-    segBox.y1 = blockV1;
-  }
-  out.segmentBox = segBox;
+  scan.segmentShift = s.segmentFactor == 2 ? 1 : 0;
+  scan.segmentColumns = cloud::samplesAlong(s.box.width(), stride * s.segmentFactor);
+  scan.segmentGrid = s.segmentFactor == 2 ? segmentDepth.data() : out.filteredDepthM.data();
+  scan.handRadius2 = seg.handRadiusM * seg.handRadiusM;
+  scan.segmentSpacing = static_cast<float>(stride * s.segmentFactor) / std::min(k.fx, k.fy);
+  for (int v = 0; v < bh; ++v) scanRow(s, v, scan, out);
+  out.segmentBox = scan.segmentBox;
   out.droppedPoints = voxels.droppedPoints();
+  return scan;
+}
+
+void CloudPipeline::Impl::emitVoxels(CloudFrame& out) {
   const int voxelCount = voxels.voxelCount();
   for (int i = 0; i < voxelCount; ++i) {
     const Vec3 c = voxels.centroid(i);
@@ -724,35 +799,61 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
     const int pv = std::clamp(roundToInt(pixel.y()), 0, k.height - 1);
     out.pointPixels.push_back(pv * k.width + pu);
   }
+}
 
-  // --- 5. segment summary; the arm is where region 1 was cut at the hand radius ---
-  Segment& s = out.segment;
-  s.found = true;
-  s.regionCount = fineFound[1] ? 2 : 1;
-  s.nearestPoint = fineRegion[0].nearestPoint;
-  s.pixelCount = maskPixels;
-  s.sampleCount = segmentedSamples;
-  s.areaM2 = fineRegion[0].areaM2;
-  if (fineFound[1]) s.areaM2 += fineRegion[1].areaM2;
-  s.centroid = segmentedSum / static_cast<float>(segmentedSamples);
-  s.limbEndFound = haveHandEnd;
-  s.limbEnd = haveHandEnd ? handEnd : Vec3::Zero();
-  const GrownRegion& hand = fineRegion[0];
-  s.cutPixelCount = hand.cutCount;
+void CloudPipeline::Impl::summariseSegment(const Search& s, const Scan& scan,
+                                           CloudFrame& out) const {
+  Segment& segment = out.segment;
+  segment.found = true;
+  segment.regionCount = s.fineFound[1] ? 2 : 1;
+  segment.nearestPoint = s.fineRegion[0].nearestPoint;
+  segment.pixelCount = scan.maskPixels;
+  segment.sampleCount = scan.segmentedSamples;
+  segment.areaM2 = s.fineRegion[0].areaM2;
+  if (s.fineFound[1]) segment.areaM2 += s.fineRegion[1].areaM2;
+  segment.centroid = scan.segmentedSum / static_cast<float>(scan.segmentedSamples);
+  segment.limbEndFound = s.haveHandEnd;
+  segment.limbEnd = s.haveHandEnd ? s.handEnd : Vec3::Zero();
+  const GrownRegion& hand = s.fineRegion[0];
+  segment.cutPixelCount = hand.cutCount;
   if (hand.cutCount > 0) {
     const auto cuts = static_cast<float>(hand.cutCount);
     const auto cells = static_cast<float>(hand.cellCount);
-    s.armDirection = normalisedOrZero<3>(hand.cutPointSum / cuts - hand.pointSum / cells);
-    s.armDirectionImage = normalisedOrZero<2>(hand.cutPixelSum / cuts - hand.pixelSum / cells);
+    segment.armDirection = normalisedOrZero<3>(hand.cutPointSum / cuts - hand.pointSum / cells);
+    segment.armDirectionImage =
+        normalisedOrZero<2>(hand.cutPixelSum / cuts - hand.pixelSum / cells);
   }
+}
 
-  // --- 6. boundary planes around the segmented pixels ---
+void CloudPipeline::Impl::buildPlanes(const Scan& scan, CloudFrame& out) {
   BoundaryPlaneConfig planeConfig = config.planes;
   // The planes go through the samples; the mask blocks reach blockOffset pixels beyond.
   planeConfig.margin +=
-      (config.planeMarginPixels + static_cast<float>(blockOffset)) / std::min(k.fx, k.fy);
-  const Vec2 armInPlane(s.armDirectionImage.x() * invFx, s.armDirectionImage.y() * invFy);
+      (config.planeMarginPixels + static_cast<float>(scan.blockOffset)) / std::min(k.fx, k.fy);
+  const Vec2 armInPlane(out.segment.armDirectionImage.x() * scan.invFx,
+                        out.segment.armDirectionImage.y() * scan.invFy);
   planeBuilder.build(hullPoints, planeConfig, armInPlane, out.planes);
+}
+
+Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
+  prepareOutput(frame, out);
+  Search s;
+  sampleCoarse(frame, s.coarse);
+  coarseGrower.reset(s.coarse, k);
+  // A coarse volume can fail at full resolution (e.g. a speckle cluster whose coarse area was
+  // overestimated): it is retired and the search goes on with the next candidate.
+  for (int round = 0; round < kCandidateRounds && !s.fineFound[0]; ++round) {
+    if (!findCoarseRegions(s)) return Ok{};  // no hand: valid, empty
+    chooseBoxAndStride(s);
+    if (s.regionCount == 2) markCoarseNeighbourhood(s);
+    segmentFine(frame, s, out);
+    if (!s.fineFound[0]) coarseGrower.retireAccepted();
+  }
+  if (!s.fineFound[0]) return Ok{};
+  const Scan scan = scanSegmented(s, out);
+  emitVoxels(out);
+  summariseSegment(s, scan, out);
+  buildPlanes(scan, out);
   return Ok{};
 }
 

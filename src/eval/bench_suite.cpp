@@ -180,69 +180,187 @@ const char* placementName(synth::CameraPlacement p) {
 
 }  // namespace
 
-Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
-  MotionSuite suite;
-  const HandSize medium = benchHandSizes()[1];
-  const int clipFrames =
-      options.frames > 0 ? options.frames : (options.quick ? kQuickFrames : kMotionFrames);
-  std::vector<std::string> clipNames;
-  for (const synth::ClipInfo& c : synth::clips())
-    if (c.handCount == 1) clipNames.push_back(c.name);
+namespace {
+
+// What the motion suite's stages share: the clip frames, profiles and placements.
+struct MotionPlan {
+  HandSize medium = benchHandSizes()[1];
+  int clipFrames = kMotionFrames;
+  std::vector<std::string> clipNames;  // one-hand clips
   std::vector<std::string> profiles;
-  for (const auto& p : synth::sensorProfiles()) profiles.push_back(p.name);
+  std::array<synth::CameraPlacement, 2> placements = {synth::CameraPlacement::DeskFacing,
+                                                      synth::CameraPlacement::HeadMounted};
+  bool quick = false;
+};
+
+MotionPlan motionPlan(const MotionSuiteOptions& options) {
+  MotionPlan plan;
+  plan.quick = options.quick;
+  plan.clipFrames =
+      options.frames > 0 ? options.frames : (options.quick ? kQuickFrames : kMotionFrames);
+  for (const synth::ClipInfo& c : synth::clips())
+    if (c.handCount == 1) plan.clipNames.push_back(c.name);
+  for (const auto& p : synth::sensorProfiles()) plan.profiles.push_back(p.name);
   if (options.quick) {
-    clipNames = {"pinch", "wave"};
-    profiles = {"tof"};
+    plan.clipNames = {"pinch", "wave"};
+    plan.profiles = {"tof"};
   }
-  const synth::CameraPlacement placements[] = {synth::CameraPlacement::DeskFacing,
-                                               synth::CameraPlacement::HeadMounted};
-  for (std::size_t p = 0; p < profiles.size(); ++p) {
-    for (synth::CameraPlacement placement : placements) {
+  return plan;
+}
+
+// An item of `group` on `clip` with the medium hand shaped unlike the model (the same shape for
+// the same clip or segment name in every row).
+SuiteItem motionItem(const MotionPlan& plan, std::string group, std::string clip,
+                     const std::string& profile, synth::CameraPlacement placement, bool autoInit,
+                     std::uint64_t seed) {
+  SuiteItem item;
+  item.group = std::move(group);
+  item.clip = std::move(clip);
+  item.profile = profile;
+  item.size = plan.medium;
+  item.autoInit = autoInit;
+  item.seed = seed;
+  item.placement = placement;
+  item.proportionSpread = kMotionProportionSpread;
+  item.proportionSeed = nameSeed(item.clip);
+  return item;
+}
+
+// Every one-hand clip at kMotionSpeed, on every profile, placement and start.
+void addClipItems(const MotionPlan& plan, MotionSuite& suite) {
+  for (std::size_t p = 0; p < plan.profiles.size(); ++p) {
+    for (synth::CameraPlacement placement : plan.placements) {
       for (bool autoInit : {false, true}) {
-        for (std::size_t c = 0; c < clipNames.size(); ++c) {
-          SuiteItem item;
-          item.group = fmt::format("clips x{} / {} / {} / {}", kMotionSpeed, profiles[p],
-                                   placementName(placement), autoInit ? "auto" : "gt");
-          item.clip = clipNames[c];
-          item.profile = profiles[p];
-          item.size = medium;
-          item.autoInit = autoInit;
-          item.frames = clipFrames;
+        for (std::size_t c = 0; c < plan.clipNames.size(); ++c) {
+          SuiteItem item =
+              motionItem(plan,
+                         fmt::format("clips x{} / {} / {} / {}", kMotionSpeed, plan.profiles[p],
+                                     placementName(placement), autoInit ? "auto" : "gt"),
+                         plan.clipNames[c], plan.profiles[p], placement, autoInit, 1 + c + 10 * p);
+          item.frames = plan.clipFrames;
           item.speed = kMotionSpeed;
-          item.seed = 1 + c + 10 * p;
-          item.placement = placement;
-          item.proportionSpread = kMotionProportionSpread;
-          item.proportionSeed = nameSeed(item.clip);
           suite.items.push_back(std::move(item));
         }
       }
     }
   }
+}
 
-  // Held objects (tof, gt start): the grasping clips with each object.
-  for (synth::CameraPlacement placement : placements) {
+// Held objects (tof, gt start): the grasping clips with each object.
+void addHeldObjectClipItems(const MotionPlan& plan, MotionSuite& suite) {
+  for (synth::CameraPlacement placement : plan.placements) {
     for (const char* clip : {"grasp-cylinder", "reach-grasp-lift"}) {
       for (std::size_t o = 0; o < std::size(kHeldObjects); ++o) {
-        if (options.quick && o > 0) continue;
-        SuiteItem item;
-        item.group = fmt::format("held objects: clips x{} / tof / {} / gt", kMotionSpeed,
-                                 placementName(placement));
-        item.clip = clip;
-        item.profile = "tof";
-        item.size = medium;
-        item.frames = clipFrames;
+        if (plan.quick && o > 0) continue;
+        SuiteItem item = motionItem(plan,
+                                    fmt::format("held objects: clips x{} / tof / {} / gt",
+                                                kMotionSpeed, placementName(placement)),
+                                    clip, "tof", placement, false, 3000 + o);
+        item.frames = plan.clipFrames;
         item.speed = kMotionSpeed;
-        item.seed = 3000 + o;
-        item.placement = placement;
-        item.proportionSpread = kMotionProportionSpread;
-        item.proportionSeed = nameSeed(item.clip);
         item.heldObject = kHeldObjects[o];
         suite.items.push_back(std::move(item));
       }
     }
   }
+}
 
-  // The animbank: segments between cuts, and the whole file through its cuts.
+// The animbank poses for the medium hand and where they jump (cuts between takes).
+struct Animbank {
+  std::shared_ptr<const std::vector<model::JointAngles>> poses;
+  std::vector<int> cuts;
+  std::vector<int> bounds;  // 0, the cuts, the pose count: segment g is [bounds[g], bounds[g+1])
+};
+
+Result<Animbank> loadAnimbank(const std::filesystem::path& file, const HandSize& size) {
+  synth::SynthOptions load;
+  load.poseFile = file;
+  load.hand = size.dimensions;
+  Result<std::vector<model::JointAngles>> angles = synth::loadPoseAngles(load);
+  if (!angles) return Error{"animbank: " + angles.message()};
+  const model::ArticulatedModel hand = model::makeDefaultHand(size.dimensions);
+  std::vector<Keypoints21> keypoints;
+  keypoints.reserve(angles->size());
+  for (const model::JointAngles& a : *angles)
+    keypoints.push_back(model::keypoints21(hand, model::forwardKinematics(hand, a)));
+  Animbank animbank;
+  animbank.cuts = findCuts(keypoints);
+  animbank.bounds = {0};
+  animbank.bounds.insert(animbank.bounds.end(), animbank.cuts.begin(), animbank.cuts.end());
+  animbank.bounds.push_back(static_cast<int>(angles->size()));
+  animbank.poses = std::make_shared<const std::vector<model::JointAngles>>(std::move(*angles));
+  return animbank;
+}
+
+// An item playing animbank segment g.
+SuiteItem segmentItem(const MotionPlan& plan, const Animbank& animbank, int g, std::string group,
+                      const std::string& profile, synth::CameraPlacement placement, bool autoInit,
+                      std::uint64_t seed) {
+  const int first = animbank.bounds[static_cast<std::size_t>(g)];
+  const int end = animbank.bounds[static_cast<std::size_t>(g) + 1];
+  SuiteItem item = motionItem(plan, std::move(group), fmt::format("animbank {}-{}", first, end - 1),
+                              profile, placement, autoInit, seed);
+  item.frames = plan.quick ? std::min(end - first, kQuickFrames) : end - first;
+  item.poses = animbank.poses;
+  item.poseStart = first;
+  return item;
+}
+
+// Every animbank segment on every profile, placement and start; with held objects; and the
+// whole file through its cuts.
+void addAnimbankItems(const MotionPlan& plan, const Animbank& animbank, MotionSuite& suite) {
+  const int segments = static_cast<int>(animbank.bounds.size()) - 1;
+  const int segmentsUsed = plan.quick ? std::min(2, segments) : segments;
+  for (std::size_t p = 0; p < plan.profiles.size(); ++p) {
+    for (synth::CameraPlacement placement : plan.placements) {
+      // The file's own (desk) placement keeps the hand at 0.18-0.55 m: mostly nearer than
+      // structured light's 0.5 m minimum range.
+      if (plan.profiles[p] == "structured-light" && placement == synth::CameraPlacement::DeskFacing)
+        continue;
+      for (bool autoInit : {false, true}) {
+        for (int g = 0; g < segmentsUsed; ++g) {
+          suite.items.push_back(
+              segmentItem(plan, animbank, g,
+                          fmt::format("animbank segments / {} / {} / {}", plan.profiles[p],
+                                      placementName(placement), autoInit ? "auto" : "gt"),
+                          plan.profiles[p], placement, autoInit,
+                          1000 + static_cast<std::uint64_t>(g) + 100 * p));
+        }
+      }
+    }
+  }
+  // Held objects: every segment with one of the objects in turn (tof, gt start).
+  for (synth::CameraPlacement placement : plan.placements) {
+    for (int g = 0; g < segmentsUsed; ++g) {
+      SuiteItem item = segmentItem(
+          plan, animbank, g,
+          fmt::format("held objects: animbank segments / tof / {} / gt", placementName(placement)),
+          "tof", placement, false, 3100 + static_cast<std::uint64_t>(g));
+      item.heldObject = kHeldObjects[static_cast<std::size_t>(g) % std::size(kHeldObjects)];
+      suite.items.push_back(std::move(item));
+    }
+  }
+  const int poseCount = static_cast<int>(animbank.poses->size());
+  for (synth::CameraPlacement placement : plan.placements) {
+    SuiteItem item = motionItem(
+        plan, fmt::format("animbank continuous / tof / {} / gt", placementName(placement)),
+        "animbank", "tof", placement, false, 2000);
+    item.frames = plan.quick && !animbank.cuts.empty() ? std::min(poseCount, animbank.cuts[0] + 10)
+                                                       : poseCount;
+    item.poses = animbank.poses;
+    for (int c : animbank.cuts)
+      if (c < item.frames) item.cuts.push_back(c);
+    suite.items.push_back(std::move(item));
+  }
+}
+
+}  // namespace
+
+Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
+  MotionSuite suite;
+  const MotionPlan plan = motionPlan(options);
+  addClipItems(plan, suite);
+  addHeldObjectClipItems(plan, suite);
   const std::filesystem::path file = options.data / "intel" / "animbank.pose";
   std::error_code ec;
   if (options.data.empty() || !std::filesystem::is_regular_file(file, ec)) {
@@ -251,95 +369,11 @@ Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
                                                      : file.string() + " not found");
     return suite;
   }
-  synth::SynthOptions load;
-  load.poseFile = file;
-  load.hand = medium.dimensions;
-  Result<std::vector<model::JointAngles>> angles = synth::loadPoseAngles(load);
-  if (!angles) return Error{"animbank: " + angles.message()};
-  const model::ArticulatedModel hand = model::makeDefaultHand(medium.dimensions);
-  std::vector<Keypoints21> keypoints;
-  keypoints.reserve(angles->size());
-  for (const model::JointAngles& a : *angles)
-    keypoints.push_back(model::keypoints21(hand, model::forwardKinematics(hand, a)));
-  const std::vector<int> cuts = findCuts(keypoints);
-  const int poseCount = static_cast<int>(angles->size());
-  const auto poses = std::make_shared<const std::vector<model::JointAngles>>(std::move(*angles));
-  suite.animbankPoses = poseCount;
-  std::vector<int> bounds = {0};
-  bounds.insert(bounds.end(), cuts.begin(), cuts.end());
-  bounds.push_back(poseCount);
-  suite.animbankSegments = static_cast<int>(bounds.size()) - 1;
-
-  std::vector<std::string> animProfiles = profiles;
-  const int segmentsUsed =
-      options.quick ? std::min(2, suite.animbankSegments) : suite.animbankSegments;
-  for (std::size_t p = 0; p < animProfiles.size(); ++p) {
-    for (synth::CameraPlacement placement : placements) {
-      // The file's own (desk) placement keeps the hand at 0.18-0.55 m: mostly nearer than
-      // structured light's 0.5 m minimum range.
-      if (animProfiles[p] == "structured-light" && placement == synth::CameraPlacement::DeskFacing)
-        continue;
-      for (bool autoInit : {false, true}) {
-        for (int g = 0; g < segmentsUsed; ++g) {
-          const int first = bounds[static_cast<std::size_t>(g)];
-          const int end = bounds[static_cast<std::size_t>(g) + 1];
-          SuiteItem item;
-          item.group = fmt::format("animbank segments / {} / {} / {}", animProfiles[p],
-                                   placementName(placement), autoInit ? "auto" : "gt");
-          item.clip = fmt::format("animbank {}-{}", first, end - 1);
-          item.profile = animProfiles[p];
-          item.size = medium;
-          item.autoInit = autoInit;
-          item.frames = options.quick ? std::min(end - first, kQuickFrames) : end - first;
-          item.seed = 1000 + static_cast<std::uint64_t>(g) + 100 * p;
-          item.placement = placement;
-          item.proportionSpread = kMotionProportionSpread;
-          item.proportionSeed = nameSeed(item.clip);
-          item.poses = poses;
-          item.poseStart = first;
-          suite.items.push_back(std::move(item));
-        }
-      }
-    }
-  }
-  // Held objects: every animbank segment with one of the objects in turn (tof, gt start).
-  for (synth::CameraPlacement placement : placements) {
-    for (int g = 0; g < segmentsUsed; ++g) {
-      const int first = bounds[static_cast<std::size_t>(g)];
-      const int end = bounds[static_cast<std::size_t>(g) + 1];
-      SuiteItem item;
-      item.group =
-          fmt::format("held objects: animbank segments / tof / {} / gt", placementName(placement));
-      item.clip = fmt::format("animbank {}-{}", first, end - 1);
-      item.profile = "tof";
-      item.size = medium;
-      item.frames = options.quick ? std::min(end - first, kQuickFrames) : end - first;
-      item.seed = 3100 + static_cast<std::uint64_t>(g);
-      item.placement = placement;
-      item.proportionSpread = kMotionProportionSpread;
-      item.proportionSeed = nameSeed(item.clip);
-      item.poses = poses;
-      item.poseStart = first;
-      item.heldObject = kHeldObjects[static_cast<std::size_t>(g) % std::size(kHeldObjects)];
-      suite.items.push_back(std::move(item));
-    }
-  }
-  for (synth::CameraPlacement placement : placements) {
-    SuiteItem item;
-    item.group = fmt::format("animbank continuous / tof / {} / gt", placementName(placement));
-    item.clip = "animbank";
-    item.profile = "tof";
-    item.size = medium;
-    item.frames = options.quick && !cuts.empty() ? std::min(poseCount, cuts[0] + 10) : poseCount;
-    item.seed = 2000;
-    item.placement = placement;
-    item.proportionSpread = kMotionProportionSpread;
-    item.proportionSeed = nameSeed(item.clip);
-    item.poses = poses;
-    for (int c : cuts)
-      if (c < item.frames) item.cuts.push_back(c);
-    suite.items.push_back(std::move(item));
-  }
+  Result<Animbank> animbank = loadAnimbank(file, plan.medium);
+  if (!animbank) return animbank.error();
+  suite.animbankPoses = static_cast<int>(animbank->poses->size());
+  suite.animbankSegments = static_cast<int>(animbank->bounds.size()) - 1;
+  addAnimbankItems(plan, *animbank, suite);
   return suite;
 }
 

@@ -75,7 +75,7 @@ struct FrameInput {
   DepthFrame live;
 };
 
-int runTrack(const TrackOptions& o) {
+FrameInput openInput(const TrackOptions& o) {
   FrameInput in;
   if (o.input.rfind("camera:", 0) == 0) {
     if (o.init == "gt") throw UsageError("--init gt: a live camera has no ground truth");
@@ -85,20 +85,29 @@ int runTrack(const TrackOptions& o) {
     in.info.frameCount = std::numeric_limits<int>::max();  // until Ctrl-C
     std::printf("tracking %s (%s) live; Ctrl-C stops\n", in.camera->info().name.c_str(),
                 in.camera->info().spec().c_str());
-  } else {
-    if (!std::filesystem::exists(o.input)) throw UsageError("input not found: " + o.input);
-    auto reader = SequenceReader::open(o.input);
-    if (!reader) throw UsageError(reader.message());
-    in.reader.emplace(std::move(*reader));
-    in.info = in.reader->info();
+    return in;
   }
-  const SequenceInfo& info = in.info;
+  if (!std::filesystem::exists(o.input)) throw UsageError("input not found: " + o.input);
+  auto reader = SequenceReader::open(o.input);
+  if (!reader) throw UsageError(reader.message());
+  in.reader.emplace(std::move(*reader));
+  in.info = in.reader->info();
+  return in;
+}
 
-  const bool autoSize = o.handSize == "auto";
-  if (autoSize && !o.hand.modelFile.empty())
-    throw UsageError("--hand-size auto sizes the built-in hand; it does not go with --model");
-  std::optional<model::ArticulatedModel> hand = handModel(o.hand);
+// Frame f of the recording, or the camera's next frame.
+void readFrame(FrameInput& in, const TrackOptions& o, int f, DepthFrame& out) {
+  if (in.camera) {
+    const Status s = in.camera->grab(out);
+    if (!s) throw std::runtime_error(o.input + ": " + s.message());
+    return;
+  }
+  auto recorded = in.reader->frame(f);
+  if (!recorded) throw UsageError(recorded.message());  // a frame that does not decode
+  out = std::move(*recorded);
+}
 
+track::TrackerSettings trackerSettings(const TrackOptions& o, const SequenceInfo& info) {
   track::TrackerSettings settings;
   settings.hands = o.hands;
   settings.perFrame = o.perFrame;
@@ -119,117 +128,146 @@ int runTrack(const TrackOptions& o) {
     }
     if (!found) throw UsageError("--disable: unknown simulation '" + name + "'");
   }
+  return settings;
+}
 
-  const int first = std::clamp(o.start, 0, info.frameCount);
-  const int last = o.frames < 0 ? info.frameCount : std::min(info.frameCount, first + o.frames);
-  // The start: ground truth keypoints, or a pose file's first pose (its keypoints too, for a
-  // model of another size), or none (automatic acquisition).
-  std::optional<Keypoints21> startKeypoints;
-  std::optional<model::ModelPose> startPose;
+// The start: ground truth keypoints, or a pose file's first pose (its keypoints too, for a
+// model of another size), or none (automatic acquisition).
+struct Start {
+  std::optional<Keypoints21> keypoints;
+  std::optional<model::ModelPose> pose;
+};
+
+Start startFrom(const TrackOptions& o, const FrameInput& in, const model::ArticulatedModel& hand,
+                int first) {
+  Start start;
   if (o.init == "gt") {
-    startKeypoints = in.reader->groundTruth(first);
-    if (!startKeypoints)
+    start.keypoints = in.reader->groundTruth(first);
+    if (!start.keypoints)
       throw UsageError("--init gt: " + o.input + " has no ground truth for frame " +
                        std::to_string(first));
   } else if (o.init != "auto") {
     auto poses = model::loadPoseSequence(o.init);
     if (!poses) throw UsageError("--init: " + poses.message());
     if (poses->frames.empty()) throw UsageError("--init: " + o.init + " holds no pose");
-    const Status s = model::checkPoseSequence(*poses, *hand);
+    const Status s = model::checkPoseSequence(*poses, hand);
     if (!s) throw UsageError("--init: " + s.message());
-    startPose = poses->frames.front();
-    startKeypoints = model::keypoints21(*hand, *startPose);
+    start.pose = poses->frames.front();
+    start.keypoints = model::keypoints21(hand, *start.pose);
   }
+  return start;
+}
 
-  // Frames read ahead (for the hand-size estimate), tracked before any other.
-  std::vector<DepthFrame> head;
-  auto readFrame = [&](int f, DepthFrame& out) {
-    if (in.camera) {
-      const Status s = in.camera->grab(out);
-      if (!s) throw std::runtime_error(o.input + ": " + s.message());
-    } else {
-      auto recorded = in.reader->frame(f);
-      if (!recorded) throw UsageError(recorded.message());  // a frame that does not decode
-      out = std::move(*recorded);
-    }
-  };
+// --hand-size auto: reads the first frames ahead into `head` (tracked before any other),
+// estimates the hand's size from them and makes `hand` that size. Returns the size record the
+// outputs carry (given, or estimated).
+std::optional<io::HandSizeRecord> sizeHand(const TrackOptions& o, FrameInput& in,
+                                           const track::TrackerSettings& settings,
+                                           const Start& start, int first, int last,
+                                           std::vector<DepthFrame>& head,
+                                           std::optional<model::ArticulatedModel>& hand) {
   std::optional<io::HandSizeRecord> handSize;
   if (o.hand.modelFile.empty()) handSize = io::HandSizeRecord{{o.hand.length, o.hand.width}};
-  if (autoSize && o.hand.lengthGiven() && o.hand.widthGiven()) {
+  if (o.handSize != "auto") return handSize;
+  if (o.hand.lengthGiven() && o.hand.widthGiven()) {
     std::printf("--hand-size auto: --hand-length and --hand-width given, nothing to estimate\n");
-  } else if (autoSize) {
-    const int count = std::min(o.handSizeFrames, last - first);
-    head.resize(static_cast<std::size_t>(std::max(count, 0)));
-    for (int i = 0; i < count; ++i) readFrame(first + i, head[static_cast<std::size_t>(i)]);
-    track::HandSizeOptions hs;
-    hs.tracker = settings;
-    hs.threads = o.threads;
-    if (o.hand.lengthGiven()) hs.length = o.hand.length;
-    if (o.hand.widthGiven()) hs.width = o.hand.width;
-    std::printf("hand size: estimating from frames %d-%d...\n", first, first + count - 1);
-    std::fflush(stdout);
-    const auto started = std::chrono::steady_clock::now();
-    auto estimate = track::estimateHandSize(head, info.intrinsics, startKeypoints, hs);
-    if (!estimate) throw std::runtime_error("--hand-size auto: " + estimate.message());
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    handSize =
-        io::HandSizeRecord{estimate->dimensions, true, estimate->framesUsed, estimate->fitScore};
-    std::printf(
-        "hand size estimate: length %.4f m  width %.4f m  (%d frames, %d candidate models, fit "
-        "%.3f, %.1f s)\n",
-        static_cast<double>(estimate->dimensions.length),
-        static_cast<double>(estimate->dimensions.width), estimate->framesUsed, estimate->candidates,
-        static_cast<double>(estimate->fitScore), seconds);
-    hand = model::makeDefaultHand(estimate->dimensions);
+    return handSize;
   }
+  const int count = std::min(o.handSizeFrames, last - first);
+  head.resize(static_cast<std::size_t>(std::max(count, 0)));
+  for (int i = 0; i < count; ++i) readFrame(in, o, first + i, head[static_cast<std::size_t>(i)]);
+  track::HandSizeOptions hs;
+  hs.tracker = settings;
+  hs.threads = o.threads;
+  if (o.hand.lengthGiven()) hs.length = o.hand.length;
+  if (o.hand.widthGiven()) hs.width = o.hand.width;
+  std::printf("hand size: estimating from frames %d-%d...\n", first, first + count - 1);
+  std::fflush(stdout);
+  const auto started = std::chrono::steady_clock::now();
+  auto estimate = track::estimateHandSize(head, in.info.intrinsics, start.keypoints, hs);
+  if (!estimate) throw std::runtime_error("--hand-size auto: " + estimate.message());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  std::printf(
+      "hand size estimate: length %.4f m  width %.4f m  (%d frames, %d candidate models, fit "
+      "%.3f, %.1f s)\n",
+      static_cast<double>(estimate->dimensions.length),
+      static_cast<double>(estimate->dimensions.width), estimate->framesUsed, estimate->candidates,
+      static_cast<double>(estimate->fitScore), seconds);
+  hand = model::makeDefaultHand(estimate->dimensions);
+  return io::HandSizeRecord{estimate->dimensions, true, estimate->framesUsed, estimate->fitScore};
+}
 
-  auto tracker = track::Tracker::create(*hand, info.intrinsics, settings);
-  if (!tracker) {
-    // The hand model is checked already (handModel); what is left is the detector's weights.
-    if (detectorWeightsGiven(o.detector)) throw UsageError(tracker.message());
-    throw std::runtime_error(tracker.message());
-  }
-  if (startPose && !(handSize && handSize->estimated)) {
-    (*tracker)->initialize(*startPose);
-  } else if (startKeypoints) {  // a pose of another model size starts from its keypoints
-    const Status s = (*tracker)->initializeFromKeypoints(*startKeypoints);
-    if (!s) throw std::runtime_error("--init " + o.init + ": " + s.message());
-  }
+// The files written as frames are tracked (JSON lines, CSV) and at the end (BVH).
+struct Outputs {
+  std::unique_ptr<io::TrackWriter> writer, csv;
+  std::optional<io::BvhWriter> bvh;
+  model::ModelPose lastPose;  // the BVH repeats the last tracked pose while the hand is lost
 
+  Status write(const track::TrackResult& r) {
+    for (io::TrackWriter* w : {writer.get(), csv.get()}) {
+      if (w == nullptr) continue;
+      if (Status s = w->write(r); !s) return s;
+    }
+    const auto& h = r.hands.front();
+    if (bvh) {
+      if (h.tracked) lastPose = h.pose;
+      if (!lastPose.bodies.empty()) bvh->add(lastPose);
+    }
+    return Ok{};
+  }
+  Status close(const std::string& bvhPath) {
+    for (io::TrackWriter* w : {writer.get(), csv.get()}) {
+      if (w == nullptr) continue;
+      if (Status s = w->close(); !s) return s;
+    }
+    if (bvh) return bvh->save(bvhPath);
+    return Ok{};
+  }
+};
+
+Outputs openOutputs(const TrackOptions& o, const model::ArticulatedModel& hand,
+                    const std::optional<io::HandSizeRecord>& handSize, float framesPerSecond) {
   io::JsonOptions json;
   json.handSize = handSize;
   json.candidates = o.candidates;
   json.candidatePoses = o.candidates;
-  std::unique_ptr<io::TrackWriter> writer, csv;
+  Outputs out;
   if (!o.out.empty()) {
-    auto w = io::TrackWriter::create(o.out, *hand, json);
+    auto w = io::TrackWriter::create(o.out, hand, json);
     if (!w) throw UsageError(w.message());
-    writer = std::move(*w);
+    out.writer = std::move(*w);
   }
   if (!o.csv.empty()) {
-    auto w = io::TrackWriter::create(o.csv, *hand, json);
+    auto w = io::TrackWriter::create(o.csv, hand, json);
     if (!w) throw UsageError(w.message());
-    csv = std::move(*w);
+    out.csv = std::move(*w);
   }
-  std::optional<io::BvhWriter> bvh;
   if (!o.bvh.empty()) {
     // Written at the end: find out now whether it can be (a path below a file, say).
     AtomicFileWriter probe;
     if (!probe.open(o.bvh)) throw UsageError(o.bvh + ": cannot write");
     std::error_code ec;
     std::filesystem::remove(probe.part(), ec);
-    bvh.emplace(*hand, info.framesPerSecond);
+    out.bvh.emplace(hand, framesPerSecond);
   }
+  return out;
+}
 
-  installInterruptHandler();
-  Progress progress("track", in.camera ? 0 : last - first);
-  std::vector<double> times;
+// What the frame loop measured.
+struct TrackTally {
+  std::vector<double> times;  // ms per frame
   eval::SequenceKeypoints accuracy;
-  accuracy.fps = info.framesPerSecond;
   int trackedFrames = 0;
   int done = 0;
-  model::ModelPose lastPose;
+};
+
+TrackTally trackFrames(const TrackOptions& o, FrameInput& in, track::Tracker& tracker,
+                       const std::vector<DepthFrame>& head, int first, int last, Outputs& outputs) {
+  installInterruptHandler();
+  Progress progress("track", in.camera ? 0 : last - first);
+  TrackTally tally;
+  tally.accuracy.fps = in.info.framesPerSecond;
   for (int f = first; f < last && !interrupted(); ++f) {
     const std::size_t ahead = static_cast<std::size_t>(f - first);
     DepthFrame recorded;
@@ -238,47 +276,31 @@ int runTrack(const TrackOptions& o) {
       depth = &head[ahead];
     } else {
       DepthFrame& target = in.camera ? in.live : recorded;
-      readFrame(f, target);
+      readFrame(in, o, f, target);
       depth = &target;
     }
-    const track::TrackResult& r = (*tracker)->track(*depth);
-    times.push_back(r.timeMs);
+    const track::TrackResult& r = tracker.track(*depth);
+    tally.times.push_back(r.timeMs);
     const auto& h = r.hands.front();
-    trackedFrames += h.tracked ? 1 : 0;
-    if (writer) {
-      const Status s = writer->write(r);
-      if (!s) throw std::runtime_error(s.message());
+    tally.trackedFrames += h.tracked ? 1 : 0;
+    if (Status s = outputs.write(r); !s) throw std::runtime_error(s.message());
+    if (in.info.hasGroundTruth) {
+      tally.accuracy.groundTruth.push_back(in.reader->groundTruth(f));
+      tally.accuracy.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
+                                                   : std::nullopt);
     }
-    if (csv) {
-      const Status s = csv->write(r);
-      if (!s) throw std::runtime_error(s.message());
-    }
-    if (bvh) {
-      if (h.tracked) lastPose = h.pose;
-      if (!lastPose.bodies.empty()) bvh->add(lastPose);
-    }
-    if (info.hasGroundTruth) {
-      accuracy.groundTruth.push_back(in.reader->groundTruth(f));
-      accuracy.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
-                                             : std::nullopt);
-    }
-    ++done;
+    ++tally.done;
     char extra[64];
     std::snprintf(extra, sizeof extra, "%s err %.0f mm", h.tracked ? "tracked" : "lost",
                   1000.0 * static_cast<double>(h.error));
-    progress.update(done, extra);
+    progress.update(tally.done, extra);
   }
   progress.finish(interrupted() ? "(interrupted: everything up to here is written)" : "");
-  for (io::TrackWriter* w : {writer.get(), csv.get()}) {
-    if (w == nullptr) continue;
-    const Status s = w->close();
-    if (!s) throw std::runtime_error(s.message());
-  }
-  if (bvh) {
-    const Status s = bvh->save(o.bvh);
-    if (!s) throw std::runtime_error(s.message());
-  }
+  return tally;
+}
 
+void printSummary(const TrackOptions& o, const std::optional<io::HandSizeRecord>& handSize,
+                  int first, const TrackTally& tally, bool hasGroundTruth) {
   if (handSize) {
     std::printf("hand size  length %.4f m  width %.4f m  (%s)\n",
                 static_cast<double>(handSize->dimensions.length),
@@ -288,13 +310,14 @@ int runTrack(const TrackOptions& o) {
                                           .c_str()
                                     : "given");
   }
-  std::printf("frames %d  tracked %d (%.1f%%)\n", done, trackedFrames,
-              done ? 100.0 * trackedFrames / done : 0.0);
-  std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n",
-              eval::percentile(times, 0.5), eval::percentile(times, 0.99),
-              eval::percentile(times, 0.5) > 0 ? 1000.0 / eval::percentile(times, 0.5) : 0.0);
-  if (info.hasGroundTruth && done > 0) {
-    auto m = eval::computeKeypointMetrics(accuracy);
+  const int done = tally.done;
+  std::printf("frames %d  tracked %d (%.1f%%)\n", done, tally.trackedFrames,
+              done ? 100.0 * tally.trackedFrames / done : 0.0);
+  const double p50 = eval::percentile(tally.times, 0.5);
+  std::printf("time per frame  p50 %.2f ms  p99 %.2f ms  (%.0f frames/s at p50)\n", p50,
+              eval::percentile(tally.times, 0.99), p50 > 0 ? 1000.0 / p50 : 0.0);
+  if (hasGroundTruth && done > 0) {
+    auto m = eval::computeKeypointMetrics(tally.accuracy);
     if (m) {
       std::printf(
           "21-keypoint error vs ground truth  mean %.2f mm  median %.2f mm  p95 %.2f mm  "
@@ -305,6 +328,39 @@ int runTrack(const TrackOptions& o) {
   for (const auto* path : {&o.out, &o.csv, &o.bvh}) {
     if (!path->empty()) std::printf("wrote %s\n", path->c_str());
   }
+}
+
+int runTrack(const TrackOptions& o) {
+  FrameInput in = openInput(o);
+  const SequenceInfo& info = in.info;
+  if (o.handSize == "auto" && !o.hand.modelFile.empty())
+    throw UsageError("--hand-size auto sizes the built-in hand; it does not go with --model");
+  std::optional<model::ArticulatedModel> hand = handModel(o.hand);
+  const track::TrackerSettings settings = trackerSettings(o, info);
+  const int first = std::clamp(o.start, 0, info.frameCount);
+  const int last = o.frames < 0 ? info.frameCount : std::min(info.frameCount, first + o.frames);
+  const Start start = startFrom(o, in, *hand, first);
+  std::vector<DepthFrame> head;  // frames read ahead for the hand-size estimate
+  const std::optional<io::HandSizeRecord> handSize =
+      sizeHand(o, in, settings, start, first, last, head, hand);
+
+  auto tracker = track::Tracker::create(*hand, info.intrinsics, settings);
+  if (!tracker) {
+    // The hand model is checked already (handModel); what is left is the detector's weights.
+    if (detectorWeightsGiven(o.detector)) throw UsageError(tracker.message());
+    throw std::runtime_error(tracker.message());
+  }
+  if (start.pose && !(handSize && handSize->estimated)) {
+    (*tracker)->initialize(*start.pose);
+  } else if (start.keypoints) {  // a pose of another model size starts from its keypoints
+    const Status s = (*tracker)->initializeFromKeypoints(*start.keypoints);
+    if (!s) throw std::runtime_error("--init " + o.init + ": " + s.message());
+  }
+
+  Outputs outputs = openOutputs(o, *hand, handSize, info.framesPerSecond);
+  const TrackTally tally = trackFrames(o, in, **tracker, head, first, last, outputs);
+  if (Status s = outputs.close(o.bvh); !s) throw std::runtime_error(s.message());
+  printSummary(o, handSize, first, tally, info.hasGroundTruth);
   return interrupted() ? 130 : kExitOk;
 }
 

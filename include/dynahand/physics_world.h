@@ -328,7 +328,7 @@ class World {
   void beginStep(float h);
   void integrate(float h);
   void endStep();
-  void buildContacts(float dt);  ///< narrow phase + contact rows (contact_rows.cpp)
+  void buildContacts(float dt);  ///< narrow phase + contact rows (contact.cpp)
   void storeContactImpulses();   ///< contact cache for the next step's warm start
 
   WorldSettings settings_;

@@ -318,15 +318,15 @@ void World::stepSideBySide(std::span<World* const> worlds, float h) {
   for (World* w : worlds) w->endStep();
 }
 
-void World::beginStep(float h) {
-  Impl& m = *impl_;
-  WorldState& s = state_;
-  const float invH = 1.0f / h;
+namespace {
+
+// Solver slots: free bodies, weld groups, static dummy; velocities integrated (gravity,
+// gyroscopic term, damping).
+void prepareSolverSlots(World::Impl& m, const WorldState& s, const WorldSettings& settings,
+                        float h) {
   const std::size_t n = m.bodies.size();
   const std::size_t groupCount = s.groups.size();
   const std::size_t slotCount = n + groupCount + 1;
-
-  // --- Solver slots: free bodies, weld groups, static dummy. ---
   m.solverBodies.resize(slotCount);
   m.slotPosition.resize(slotCount);
   m.slotOrientation.resize(slotCount);
@@ -343,12 +343,11 @@ void World::beginStep(float h) {
     b.v = s.linearVelocity[i];
     b.w = s.angularVelocity[i];
     if (c.type != BodyType::Dynamic) continue;
-    // Integrate velocities: gravity, gyroscopic term, damping.
     b.invMass = 1.0f / c.mass;
     const Mat3 r = s.orientation[i].toRotationMatrix();
     setInvInertia(b, r * c.inertiaLocal.inverse() * r.transpose());
-    b.v += h * settings_.gravity;
-    if (settings_.gyroscopic) b.w = gyroscopicStep(b.w, s.orientation[i], c.inertiaLocal, h);
+    b.v += h * settings.gravity;
+    if (settings.gyroscopic) b.w = gyroscopicStep(b.w, s.orientation[i], c.inertiaLocal, h);
     b.v *= 1.0f / (1.0f + h * c.linearDamping);
     b.w *= 1.0f / (1.0f + h * c.angularDamping);
   }
@@ -367,26 +366,22 @@ void World::beginStep(float h) {
     b.invMass = 1.0f / grp.mass;
     const Mat3 r = grp.orientation.toRotationMatrix();
     setInvInertia(b, r * grp.inertiaLocal.inverse() * r.transpose());
-    b.v = grp.linearVelocity + h * settings_.gravity;
-    b.w = settings_.gyroscopic
+    b.v = grp.linearVelocity + h * settings.gravity;
+    b.w = settings.gyroscopic
               ? gyroscopicStep(grp.angularVelocity, grp.orientation, grp.inertiaLocal, h)
               : grp.angularVelocity;
     b.v *= 1.0f / (1.0f + h * linDamp / grp.mass);
     b.w *= 1.0f / (1.0f + h * angDamp / grp.mass);
   }
-  const int dummy = static_cast<int>(slotCount - 1);
+}
 
-  // --- Rows. Order of the sweeps: drives, cones, contacts, limits, joint points last so the
-  // skeleton is the best-satisfied constraint at the end of every sweep. ---
-  m.rows.clear();
+// Body drives: 3 linear + 3 angular motor rows against the static dummy slot.
+void addBodyDriveRows(World::Impl& m, const WorldState& s, int dummy, float h) {
   RowBuilder rb{m};
-  auto slotOf = [&](std::size_t body) { return m.slotOf(s, static_cast<BodyId>(body)); };
-
-  // Body drives: 3 linear + 3 angular motor rows against the static dummy.
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
     const BodyConfig& c = m.bodies[i];
     if (!c.driveEnabled || c.type != BodyType::Dynamic) continue;
-    const int slot = slotOf(i);
+    const int slot = m.slotOf(s, static_cast<BodyId>(i));
     const float rate = 1.0f / std::max(c.driveTimeConstant, h);
     const Vec3 targetCom = c.driveTarget.p + c.driveTarget.q * c.centroid;
     const Vec3 linVel = (targetCom - s.position[i]) * rate;
@@ -407,12 +402,16 @@ void World::beginStep(float h) {
              false);
     }
   }
-  // Joint drives: 3 angular motor rows towards the target relative rotation.
+}
+
+// Joint drives: 3 angular motor rows towards the target relative rotation.
+void addJointDriveRows(World::Impl& m, const WorldState& s, float h) {
+  RowBuilder rb{m};
   for (const JointConfig& j : m.joints) {
     if (!j.driveEnabled) continue;
     const auto pa = static_cast<std::size_t>(j.def.parent),
                pb = static_cast<std::size_t>(j.def.child);
-    const int sa = slotOf(pa), sb = slotOf(pb);
+    const int sa = m.slotOf(s, static_cast<BodyId>(pa)), sb = m.slotOf(s, static_cast<BodyId>(pb));
     if (sa == sb) continue;
     const Quat desired = s.orientation[pa] * j.def.frameParent * j.driveTarget;
     const Quat actual = s.orientation[pb] * j.def.frameChild;
@@ -437,11 +436,15 @@ void World::beginStep(float h) {
       }
     }
   }
-  // Angular cones: angle(uA, uB) <= maxAngle, one-sided.
+}
+
+// Angular cones: angle(uA, uB) <= maxAngle, one-sided.
+void addConeRows(World::Impl& m, const WorldState& s, const WorldSettings& settings, float invH) {
+  RowBuilder rb{m};
   for (const ConeConfig& c : m.cones) {
     if (!c.enabled) continue;
     const auto ia = static_cast<std::size_t>(c.a), ib = static_cast<std::size_t>(c.b);
-    const int sa = slotOf(ia), sb = slotOf(ib);
+    const int sa = m.slotOf(s, static_cast<BodyId>(ia)), sb = m.slotOf(s, static_cast<BodyId>(ib));
     if (sa == sb) continue;
     const Vec3 u = rotateVector(s.orientation[ia], c.axisA),
                v = rotateVector(s.orientation[ib], c.axisB);
@@ -451,89 +454,100 @@ void World::beginStep(float h) {
     const float len = axis.norm();
     if (len > 1e-4f) {
       axis /= len;
-      rb.add(sa, sb, Vec3::Zero(), axis, -axis, oneSidedBias(err, settings_.limitErp, invH), 0.0f,
+      rb.add(sa, sb, Vec3::Zero(), axis, -axis, oneSidedBias(err, settings.limitErp, invH), 0.0f,
              kInf, 0.0f, true);
     } else {
       // (Anti)parallel: the opening direction is undefined, so bound the rotation rate about
       // both axes perpendicular to u (speculative; keeps the angle <= ~sqrt(2) maxAngle).
       const Vec3 p1 = u.unitOrthogonal(), p2 = u.cross(p1);
       for (const Vec3& p : {p1, p2}) {
-        rb.add(sa, sb, Vec3::Zero(), p, -p, oneSidedBias(err, settings_.limitErp, invH), 0.0f, kInf,
+        rb.add(sa, sb, Vec3::Zero(), p, -p, oneSidedBias(err, settings.limitErp, invH), 0.0f, kInf,
                0.0f, true);
-        rb.add(sa, sb, Vec3::Zero(), -p, p, oneSidedBias(err, settings_.limitErp, invH), 0.0f, kInf,
+        rb.add(sa, sb, Vec3::Zero(), -p, p, oneSidedBias(err, settings.limitErp, invH), 0.0f, kInf,
                0.0f, true);
       }
     }
   }
-  buildContacts(h);  // contacts.cpp-free part: narrow phase + rows (below)
-  // Joints: limits then points.
+}
+
+// Joint limits: per axis, a (speculative) one-sided row for each side the angle could reach
+// within the step, warm-started from the joint's stored impulses.
+void addJointLimitRows(World::Impl& m, WorldState& s, const WorldSettings& settings, float h,
+                       float invH) {
+  RowBuilder rb{m};
   for (std::size_t ji = 0; ji < m.joints.size(); ++ji) {
     const JointConfig& j = m.joints[ji];
     float* store = &s.jointImpulse[ji * kJointImpulses];
     const auto pa = static_cast<std::size_t>(j.def.parent),
                pb = static_cast<std::size_t>(j.def.child);
-    const int sa = slotOf(pa), sb = slotOf(pb);
+    const int sa = m.slotOf(s, static_cast<BodyId>(pa)), sb = m.slotOf(s, static_cast<BodyId>(pb));
     if (sa == sb) {  // welded together: the joint is internal to the group
       std::fill(store, store + kJointImpulses, 0.0f);
       continue;
     }
-    if (j.def.limitsEnabled) {
-      const Quat frameA = s.orientation[pa] * j.def.frameParent;
-      const Quat rel = frameA.conjugate() * (s.orientation[pb] * j.def.frameChild);
-      const Vec3 angles = decomposeJointRotation(rel);
-      const Vec3 wRel = m.solverBodies[static_cast<std::size_t>(sb)].w -
-                        m.solverBodies[static_cast<std::size_t>(sa)].w;
-      const Vec3 d = rel * Vec3::UnitX();
-      const float dxy2 = std::max(d.x() * d.x() + d.y() * d.y(), 1e-12f);
-      // Rate axes (joint frame): d(angle)/dt = axis · (wB - wA) expressed in frame A.
-      Vec3 axes[3];
-      axes[0] = Vec3(-d.z() * d.x(), -d.z() * d.y(), dxy2) / dxy2;
-      axes[1] = Vec3(-d.y(), d.x(), 0.0f) / std::sqrt(dxy2);
-      // Twist = 2 atan2(q.x, q.w) of the relative rotation (its swing has no x part), so under
-      // a small left rotation δ (dq = ½ (0, δ) q) its rate is
-      // (w² + x², w z + x y, x z - w y) / (w² + x²) · δ.
-      {
-        const float w = rel.w(), x = rel.x(), y = rel.y(), z = rel.z();
-        const float wx2 = std::max(w * w + x * x, 1e-12f);
-        axes[2] = Vec3(1.0f, (w * z + x * y) / wx2, (x * z - w * y) / wx2);
-      }
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 axisWorld = frameA * axes[k];
-        const float toLower = angles[k] - j.def.lower[k];
-        const float toUpper = j.def.upper[k] - angles[k];
-        float* lowStore = store + 3 + 2 * k;
-        float* upStore = lowStore + 1;
-        // A side gets a (speculative) row when the angle could reach it within this step:
-        // within kLimitMargin plus twice the current relative rate. Drives raise the rate
-        // inside the solve, so they should not close more than kLimitMargin per step.
-        const float rate = std::abs(axisWorld.dot(wRel));
-        const float reach = kLimitMargin + 2.0f * rate * h;
-        if (toLower < reach) {
-          rb.add(sa, sb, Vec3::Zero(), -axisWorld, axisWorld,
-                 oneSidedBias(toLower, settings_.limitErp, invH), 0.0f, kInf, *lowStore, true);
-          m.rows.back().store = lowStore;
-        } else {
-          *lowStore = 0.0f;
-        }
-        if (toUpper < reach) {
-          rb.add(sa, sb, Vec3::Zero(), axisWorld, -axisWorld,
-                 oneSidedBias(toUpper, settings_.limitErp, invH), 0.0f, kInf, *upStore, true);
-          m.rows.back().store = upStore;
-        } else {
-          *upStore = 0.0f;
-        }
-      }
-    } else {
+    if (!j.def.limitsEnabled) {
       std::fill(store + 3, store + kJointImpulses, 0.0f);
+      continue;
+    }
+    const Quat frameA = s.orientation[pa] * j.def.frameParent;
+    const Quat rel = frameA.conjugate() * (s.orientation[pb] * j.def.frameChild);
+    const Vec3 angles = decomposeJointRotation(rel);
+    const Vec3 wRel = m.solverBodies[static_cast<std::size_t>(sb)].w -
+                      m.solverBodies[static_cast<std::size_t>(sa)].w;
+    const Vec3 d = rel * Vec3::UnitX();
+    const float dxy2 = std::max(d.x() * d.x() + d.y() * d.y(), 1e-12f);
+    // Rate axes (joint frame): d(angle)/dt = axis · (wB - wA) expressed in frame A.
+    Vec3 axes[3];
+    axes[0] = Vec3(-d.z() * d.x(), -d.z() * d.y(), dxy2) / dxy2;
+    axes[1] = Vec3(-d.y(), d.x(), 0.0f) / std::sqrt(dxy2);
+    // Twist = 2 atan2(q.x, q.w) of the relative rotation (its swing has no x part), so under
+    // a small left rotation δ (dq = ½ (0, δ) q) its rate is
+    // (w² + x², w z + x y, x z - w y) / (w² + x²) · δ.
+    {
+      const float w = rel.w(), x = rel.x(), y = rel.y(), z = rel.z();
+      const float wx2 = std::max(w * w + x * x, 1e-12f);
+      axes[2] = Vec3(1.0f, (w * z + x * y) / wx2, (x * z - w * y) / wx2);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 axisWorld = frameA * axes[k];
+      const float toLower = angles[k] - j.def.lower[k];
+      const float toUpper = j.def.upper[k] - angles[k];
+      float* lowStore = store + 3 + 2 * k;
+      float* upStore = lowStore + 1;
+      // A side gets a (speculative) row when the angle could reach it within this step:
+      // within kLimitMargin plus twice the current relative rate. Drives raise the rate
+      // inside the solve, so they should not close more than kLimitMargin per step.
+      const float rate = std::abs(axisWorld.dot(wRel));
+      const float reach = kLimitMargin + 2.0f * rate * h;
+      if (toLower < reach) {
+        rb.add(sa, sb, Vec3::Zero(), -axisWorld, axisWorld,
+               oneSidedBias(toLower, settings.limitErp, invH), 0.0f, kInf, *lowStore, true);
+        m.rows.back().store = lowStore;
+      } else {
+        *lowStore = 0.0f;
+      }
+      if (toUpper < reach) {
+        rb.add(sa, sb, Vec3::Zero(), axisWorld, -axisWorld,
+               oneSidedBias(toUpper, settings.limitErp, invH), 0.0f, kInf, *upStore, true);
+        m.rows.back().store = upStore;
+      } else {
+        *upStore = 0.0f;
+      }
     }
   }
+}
+
+// Joint points: one 3x3 block per joint (its anchors held together), and the position
+// projection's anchors.
+void buildJointPointBlocks(World::Impl& m, WorldState& s, const WorldSettings& settings,
+                           float invH) {
   m.jointPositions.clear();
   m.pointBlocks.clear();
   for (std::size_t ji = 0; ji < m.joints.size(); ++ji) {
     const JointConfig& j = m.joints[ji];
     const auto pa = static_cast<std::size_t>(j.def.parent),
                pb = static_cast<std::size_t>(j.def.child);
-    const int sa = slotOf(pa), sb = slotOf(pb);
+    const int sa = m.slotOf(s, static_cast<BodyId>(pa)), sb = m.slotOf(s, static_cast<BodyId>(pb));
     if (sa == sb) continue;
     float* store = &s.jointImpulse[ji * kJointImpulses];
     Vec3 worldA, worldB;
@@ -550,20 +564,42 @@ void World::beginStep(float h) {
                    skB * invInertiaMatrix(b) * skB;
     const Mat3 invK = std::abs(k.determinant()) > 1e-30f ? Mat3(k.inverse())
                                                          : Mat3::Zero();  // both static: inert
-    m.pointBlocks.push_back({sa, sb, rA, rB, invK, settings_.jointErp * invH * c,
+    m.pointBlocks.push_back({sa, sb, rA, rB, invK, settings.jointErp * invH * c,
                              Vec3(store[0], store[1], store[2]), store});
   }
+}
 
-  // Surface rows (one body each), packed eight to a batch on different slots.
-  prepareSurfaceRows(m, s, rows_, settings_.surfaceErp, invH);
-  m.surfaceBatches.build(m.surfaceRows, m.solverBodies, dummy);
-
-  // --- Warm start (then step() solves with bias, integrates positions and relaxes). ---
+// Warm start: last step's impulses applied (then step() solves with bias, integrates
+// positions and relaxes).
+void warmStart(World::Impl& m) {
   for (const Row& r : m.rows) {
     if (r.impulse != 0.0f) applyRowImpulse(m.solverBodies, r, r.impulse);
   }
-  for (const Impl::PointBlock& pb : m.pointBlocks)
+  for (const World::Impl::PointBlock& pb : m.pointBlocks)
     applyPointImpulse(m.solverBodies, pb, pb.impulse);
+}
+
+}  // namespace
+
+void World::beginStep(float h) {
+  Impl& m = *impl_;
+  WorldState& s = state_;
+  const float invH = 1.0f / h;
+  prepareSolverSlots(m, s, settings_, h);
+  const int dummy = static_cast<int>(m.solverBodies.size() - 1);
+  // Rows. Order of the sweeps: drives, cones, contacts, limits, joint points last so the
+  // skeleton is the best-satisfied constraint at the end of every sweep.
+  m.rows.clear();
+  addBodyDriveRows(m, s, dummy, h);
+  addJointDriveRows(m, s, h);
+  addConeRows(m, s, settings_, invH);
+  buildContacts(h);  // narrow phase + contact rows (contact.cpp)
+  addJointLimitRows(m, s, settings_, h, invH);
+  buildJointPointBlocks(m, s, settings_, invH);
+  // Surface rows (one body each), packed eight to a batch on different slots.
+  prepareSurfaceRows(m, s, rows_, settings_.surfaceErp, invH);
+  m.surfaceBatches.build(m.surfaceRows, m.solverBodies, dummy);
+  warmStart(m);
 }
 
 void World::integrate(float h) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -84,70 +85,71 @@ ModelSpec ArticulatedModel::spec() const {
   return spec;
 }
 
-Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
-  ArticulatedModel model;
-  model.metadata_ = spec.metadata;
-  if (!std::isfinite(spec.metadata.referenceLength) || spec.metadata.referenceLength < 0.0f) {
-    return pathError("metadata.referenceLength", "must be a finite number >= 0");
+namespace {
+
+// Index of the body named `name` in `bodies`, -1 when none.
+int bodyIndexIn(const std::vector<Body>& bodies, const std::string& name) {
+  for (std::size_t i = 0; i < bodies.size(); ++i)
+    if (bodies[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+// Body i of the spec: its name (unique), hull and mass; parent and joint are set later.
+Result<Body> compileBody(const ModelSpec& spec, int i) {
+  const BodySpec& b = spec.bodies[static_cast<size_t>(i)];
+  const std::string path = fmt::format("bodies[{}]", i);
+  if (b.name.empty()) return pathError(path + ".name", "empty");
+  for (int k = 0; k < i; ++k) {
+    if (spec.bodies[static_cast<size_t>(k)].name == b.name) {
+      return pathError(path + ".name",
+                       fmt::format("duplicate name '{}' (also bodies[{}])", b.name, k));
+    }
   }
-  if (spec.bodies.empty()) return pathError("bodies", "no bodies");
-  const int bodyCount = static_cast<int>(spec.bodies.size());
-
-  // Bodies: names, hulls, masses.
-  for (int i = 0; i < bodyCount; ++i) {
-    const BodySpec& b = spec.bodies[static_cast<size_t>(i)];
-    const std::string path = fmt::format("bodies[{}]", i);
-    if (b.name.empty()) return pathError(path + ".name", "empty");
-    for (int k = 0; k < i; ++k) {
-      if (spec.bodies[static_cast<size_t>(k)].name == b.name) {
-        return pathError(path + ".name",
-                         fmt::format("duplicate name '{}' (also bodies[{}])", b.name, k));
-      }
-    }
-    for (size_t v = 0; v < b.vertices.size(); ++v) {
-      if (!finite(b.vertices[v]))
-        return pathError(fmt::format("{}.vertices[{}]", path, v), "not finite");
-    }
-    Result<physics::ConvexShape> shape = physics::ConvexShape::fromPoints(b.vertices);
-    // Non-finite points were caught above: what remains is a flat or too small point set.
-    if (!shape)
-      return pathError(path + ".vertices",
-                       "fewer than 4 non-coplanar points (" + shape.message() + ")");
-    if (b.mass && b.density) return pathError(path, "give mass or density, not both");
-    float mass = 0.0f;
-    if (b.mass) {
-      if (!std::isfinite(*b.mass) || *b.mass <= 0.0f)
-        return pathError(path + ".mass", "must be a positive number (kg)");
-      mass = *b.mass;
-    } else {
-      const float density = b.density.value_or(kDefaultDensity);
-      if (!std::isfinite(density) || density <= 0.0f) {
-        return pathError(path + ".density", "must be a positive number (kg/m^3)");
-      }
-      mass = density * shape->volume();
-      if (!std::isfinite(mass) || mass <= 0.0f) {
-        return pathError(path + ".density",
-                         fmt::format("gives a mass of {} kg (hull volume {} m^3); the mass must "
-                                     "be a positive finite number",
-                                     mass, shape->volume()));
-      }
-    }
-    model.bodies_.push_back(Body{b.name, b.vertices, std::move(shape).value(), mass, -1, -1});
+  for (size_t v = 0; v < b.vertices.size(); ++v) {
+    if (!finite(b.vertices[v]))
+      return pathError(fmt::format("{}.vertices[{}]", path, v), "not finite");
   }
+  Result<physics::ConvexShape> shape = physics::ConvexShape::fromPoints(b.vertices);
+  // Non-finite points were caught above: what remains is a flat or too small point set.
+  if (!shape)
+    return pathError(path + ".vertices",
+                     "fewer than 4 non-coplanar points (" + shape.message() + ")");
+  if (b.mass && b.density) return pathError(path, "give mass or density, not both");
+  float mass = 0.0f;
+  if (b.mass) {
+    if (!std::isfinite(*b.mass) || *b.mass <= 0.0f)
+      return pathError(path + ".mass", "must be a positive number (kg)");
+    mass = *b.mass;
+  } else {
+    const float density = b.density.value_or(kDefaultDensity);
+    if (!std::isfinite(density) || density <= 0.0f) {
+      return pathError(path + ".density", "must be a positive number (kg/m^3)");
+    }
+    mass = density * shape->volume();
+    if (!std::isfinite(mass) || mass <= 0.0f) {
+      return pathError(path + ".density",
+                       fmt::format("gives a mass of {} kg (hull volume {} m^3); the mass must "
+                                   "be a positive finite number",
+                                   mass, shape->volume()));
+    }
+  }
+  return Body{b.name, b.vertices, std::move(shape).value(), mass, -1, -1};
+}
 
-  auto findBody = [&](const std::string& name) { return model.bodyIndex(name); };
-
-  // Joints: references, anchors, frames, limits; each body the child of at most one joint.
+// Joints: references, anchors, frames, limits; each body the child of at most one joint
+// (its parent and joint set in `bodies`).
+Result<std::vector<Joint>> compileJoints(const ModelSpec& spec, std::vector<Body>& bodies) {
+  std::vector<Joint> joints;
   for (size_t j = 0; j < spec.joints.size(); ++j) {
     const JointSpec& js = spec.joints[j];
     const std::string path = fmt::format("joints[{}]", j);
-    const int parent = findBody(js.parent);
-    const int child = findBody(js.child);
+    const int parent = bodyIndexIn(bodies, js.parent);
+    const int child = bodyIndexIn(bodies, js.child);
     if (parent < 0) return pathError(path + ".parent", fmt::format("unknown body '{}'", js.parent));
     if (child < 0) return pathError(path + ".child", fmt::format("unknown body '{}'", js.child));
     if (parent == child)
       return pathError(path, fmt::format("parent and child are the same body '{}'", js.child));
-    Body& childBody = model.bodies_[static_cast<size_t>(child)];
+    Body& childBody = bodies[static_cast<size_t>(child)];
     if (childBody.joint >= 0) {
       return pathError(path + ".child", fmt::format("body '{}' is already the child of joints[{}]",
                                                     js.child, childBody.joint));
@@ -163,102 +165,149 @@ Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
     childBody.joint = static_cast<int>(j);
     // A frame that is unit to float precision is kept bit-exact (file round trips).
     const Quat frame = std::abs(norm - 1.0f) < 1e-5f ? js.frame : js.frame.normalized();
-    model.joints_.push_back(
+    joints.push_back(
         Joint{parent, child, js.anchorParent, js.anchorChild, frame, js.minAngle, js.maxAngle});
   }
+  return joints;
+}
 
-  // The parent graph must be a tree: no cycles, exactly one root.
+// The root: the parent graph must be a tree (no cycles, exactly one body without a parent).
+Result<int> findRoot(const std::vector<Body>& bodies) {
+  const int bodyCount = static_cast<int>(bodies.size());
+  const auto body = [&](int b) -> const Body& { return bodies[static_cast<size_t>(b)]; };
   for (int i = 0; i < bodyCount; ++i) {
     int b = i;
     for (int steps = 0; b >= 0; ++steps) {
       if (steps > bodyCount) {
-        std::string cycle = model.bodies_[static_cast<size_t>(i)].name;
-        int c = model.bodies_[static_cast<size_t>(i)].parent;
-        for (int k = 0; k < bodyCount && c != i;
-             ++k, c = model.bodies_[static_cast<size_t>(c)].parent) {
-          cycle += " -> " + model.bodies_[static_cast<size_t>(c)].name;
-        }
-        return pathError("joints", fmt::format("cycle in the parent graph: {} -> {}", cycle,
-                                               model.bodies_[static_cast<size_t>(i)].name));
+        std::string cycle = body(i).name;
+        int c = body(i).parent;
+        for (int k = 0; k < bodyCount && c != i; ++k, c = body(c).parent)
+          cycle += " -> " + body(c).name;
+        return pathError("joints",
+                         fmt::format("cycle in the parent graph: {} -> {}", cycle, body(i).name));
       }
-      b = model.bodies_[static_cast<size_t>(b)].parent;
+      b = body(b).parent;
     }
   }
   std::vector<int> roots;
   for (int i = 0; i < bodyCount; ++i) {
-    if (model.bodies_[static_cast<size_t>(i)].parent < 0) roots.push_back(i);
+    if (body(i).parent < 0) roots.push_back(i);
   }
   if (roots.size() != 1) {
     std::string names;
-    for (int r : roots)
-      names += (names.empty() ? "'" : ", '") + model.bodies_[static_cast<size_t>(r)].name + "'";
+    for (int r : roots) names += (names.empty() ? "'" : ", '") + body(r).name + "'";
     return pathError("joints",
                      fmt::format("{} bodies have no parent joint ({}); exactly one root is allowed",
                                  roots.size(), names));
   }
-  model.root_ = roots[0];
+  return roots[0];
+}
 
-  // Kinematic order: by depth, then by index (stable, deterministic).
-  std::vector<int> depth(static_cast<size_t>(bodyCount), 0);
-  for (int i = 0; i < bodyCount; ++i) {
-    for (int b = model.bodies_[static_cast<size_t>(i)].parent; b >= 0;
-         b = model.bodies_[static_cast<size_t>(b)].parent) {
-      ++depth[static_cast<size_t>(i)];
-    }
+// Kinematic order: by depth, then by index (stable, deterministic).
+std::vector<int> kinematicOrder(const std::vector<Body>& bodies) {
+  const std::size_t n = bodies.size();
+  std::vector<int> depth(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int b = bodies[i].parent; b >= 0; b = bodies[static_cast<size_t>(b)].parent) ++depth[i];
   }
-  model.order_.resize(static_cast<size_t>(bodyCount));
-  for (int i = 0; i < bodyCount; ++i) model.order_[static_cast<size_t>(i)] = i;
-  std::stable_sort(model.order_.begin(), model.order_.end(), [&](int a, int b) {
+  std::vector<int> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
     return depth[static_cast<size_t>(a)] < depth[static_cast<size_t>(b)];
   });
+  return order;
+}
 
-  const size_t n = static_cast<size_t>(bodyCount);
-  model.ancestorOrSelf_.assign(n * n, 0);
-  for (int i = 0; i < bodyCount; ++i) {
-    for (int b = i; b >= 0; b = model.bodies_[static_cast<size_t>(b)].parent) {
-      model.ancestorOrSelf_[static_cast<size_t>(i) * n + static_cast<size_t>(b)] = 1;
-    }
+// (n x n) 1 where body j is body i or one of its ancestors.
+std::vector<std::uint8_t> ancestorMatrix(const std::vector<Body>& bodies) {
+  const std::size_t n = bodies.size();
+  std::vector<std::uint8_t> ancestorOrSelf(n * n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int b = static_cast<int>(i); b >= 0; b = bodies[static_cast<size_t>(b)].parent)
+      ancestorOrSelf[i * n + static_cast<size_t>(b)] = 1;
   }
+  return ancestorOrSelf;
+}
 
-  // Collision filter.
-  model.collision_ = spec.collision;
-  model.collides_.assign(n * n, 1);
-  for (size_t i = 0; i < n; ++i) model.collides_[i * n + i] = 0;
+// (n x n) collision filter: 1 where a pair may collide.
+Result<std::vector<std::uint8_t>> collisionMatrix(const ModelSpec& spec,
+                                                  const std::vector<Body>& bodies,
+                                                  const std::vector<Joint>& joints) {
+  const std::size_t n = bodies.size();
+  std::vector<std::uint8_t> collides(n * n, 1);
+  for (size_t i = 0; i < n; ++i) collides[i * n + i] = 0;
   if (spec.collision.ignoreJointNeighbours) {
-    for (const Joint& j : model.joints_) {
-      model.collides_[static_cast<size_t>(j.parent) * n + static_cast<size_t>(j.child)] = 0;
-      model.collides_[static_cast<size_t>(j.child) * n + static_cast<size_t>(j.parent)] = 0;
+    for (const Joint& j : joints) {
+      collides[static_cast<size_t>(j.parent) * n + static_cast<size_t>(j.child)] = 0;
+      collides[static_cast<size_t>(j.child) * n + static_cast<size_t>(j.parent)] = 0;
     }
   }
   for (size_t p = 0; p < spec.collision.ignoredPairs.size(); ++p) {
     const auto& [nameA, nameB] = spec.collision.ignoredPairs[p];
-    const int a = findBody(nameA);
-    const int b = findBody(nameB);
+    const int a = bodyIndexIn(bodies, nameA);
+    const int b = bodyIndexIn(bodies, nameB);
     if (a < 0)
       return pathError(fmt::format("collision.ignorePairs[{}][0]", p),
                        fmt::format("unknown body '{}'", nameA));
     if (b < 0)
       return pathError(fmt::format("collision.ignorePairs[{}][1]", p),
                        fmt::format("unknown body '{}'", nameB));
-    model.collides_[static_cast<size_t>(a) * n + static_cast<size_t>(b)] = 0;
-    model.collides_[static_cast<size_t>(b) * n + static_cast<size_t>(a)] = 0;
+    collides[static_cast<size_t>(a) * n + static_cast<size_t>(b)] = 0;
+    collides[static_cast<size_t>(b) * n + static_cast<size_t>(a)] = 0;
   }
+  return collides;
+}
 
-  // Keypoints.
+// Keypoints: unique names, known bodies, finite points, radii >= 0.
+Result<std::vector<Keypoint>> compileKeypoints(const ModelSpec& spec,
+                                               const std::vector<Body>& bodies) {
+  std::vector<Keypoint> keypoints;
   for (size_t k = 0; k < spec.keypoints.size(); ++k) {
     const KeypointSpec& ks = spec.keypoints[k];
     const std::string path = fmt::format("keypoints[{}]", k);
     if (ks.name.empty()) return pathError(path + ".name", "empty");
-    if (model.keypointIndex(ks.name) >= 0)
-      return pathError(path + ".name", fmt::format("duplicate name '{}'", ks.name));
-    const int body = findBody(ks.body);
+    for (const Keypoint& earlier : keypoints)
+      if (earlier.name == ks.name)
+        return pathError(path + ".name", fmt::format("duplicate name '{}'", ks.name));
+    const int body = bodyIndexIn(bodies, ks.body);
     if (body < 0) return pathError(path + ".body", fmt::format("unknown body '{}'", ks.body));
     if (!finite(ks.point)) return pathError(path + ".point", "not finite");
     if (!std::isfinite(ks.radius) || ks.radius < 0.0f)
       return pathError(path + ".radius", "must be a number >= 0");
-    model.keypoints_.push_back(Keypoint{ks.name, body, ks.point, ks.radius});
+    keypoints.push_back(Keypoint{ks.name, body, ks.point, ks.radius});
   }
+  return keypoints;
+}
 
+}  // namespace
+
+Result<ArticulatedModel> buildModel(const ModelSpec& spec) {
+  ArticulatedModel model;
+  model.metadata_ = spec.metadata;
+  if (!std::isfinite(spec.metadata.referenceLength) || spec.metadata.referenceLength < 0.0f) {
+    return pathError("metadata.referenceLength", "must be a finite number >= 0");
+  }
+  if (spec.bodies.empty()) return pathError("bodies", "no bodies");
+  for (int i = 0; i < static_cast<int>(spec.bodies.size()); ++i) {
+    Result<Body> body = compileBody(spec, i);
+    if (!body) return body.error();
+    model.bodies_.push_back(std::move(body).value());
+  }
+  Result<std::vector<Joint>> joints = compileJoints(spec, model.bodies_);
+  if (!joints) return joints.error();
+  model.joints_ = std::move(joints).value();
+  Result<int> root = findRoot(model.bodies_);
+  if (!root) return root.error();
+  model.root_ = *root;
+  model.order_ = kinematicOrder(model.bodies_);
+  model.ancestorOrSelf_ = ancestorMatrix(model.bodies_);
+  model.collision_ = spec.collision;
+  Result<std::vector<std::uint8_t>> collides = collisionMatrix(spec, model.bodies_, model.joints_);
+  if (!collides) return collides.error();
+  model.collides_ = std::move(collides).value();
+  Result<std::vector<Keypoint>> keypoints = compileKeypoints(spec, model.bodies_);
+  if (!keypoints) return keypoints.error();
+  model.keypoints_ = std::move(keypoints).value();
   detail::resolveHandLayout(model.keypoints_, model.hasKeypoints21_, model.keypoints21_);
   if (model.hasKeypoints21_) model.hasOpenXr_ = detail::computeOpenXrFrames(model, model.openXr_);
   return model;

@@ -359,7 +359,7 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
   }
 }
 
-void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
+void HandTracker::prepareFrameStart(const HandFrame& frame) {
   auto& world = rig_.world();
   world.saveState(start_);
   rig_.readPose(pose_);
@@ -375,95 +375,104 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   }
   const int forearm = rig_.anatomy().forearm;
   const Pose forearmPose = world.pose(forearm);
-  const AxisHold hold{forearm, Vec3::Zero(), forearmPose.p,
-                      forearmPose.rotate(rig_.anatomy().forearmAxis), settings_.forearmHoldForce};
+  forearmHold_ =
+      AxisHold{forearm, Vec3::Zero(), forearmPose.p, forearmPose.rotate(rig_.anatomy().forearmAxis),
+               settings_.forearmHoldForce};
   model::jointAnglesInto(*model_, pose_, startAngles_);
   const FrameInput input{frame.points,
                          frame.planes,
                          {},
                          frame.cloud,
-                         settings_.forearmHoldForce > 0.0f ? &hold : nullptr,
+                         settings_.forearmHoldForce > 0.0f ? &forearmHold_ : nullptr,
                          {}};
   // Every simulation's first substep maps the points at the same poses: once, shared.
   simulator_.mapFrameStart(rig_, input);
   keptIndex_.clear();
   frameStartBodies_.clear();
-  FrameInput laneInput = input;
+  // Built in place: the simulator recognises the lanes' input by its address (shared rows).
+  FrameStart& start = frameStart_;
+  start = FrameStart{input, false, nullptr};
   if (settings_.palmPointCap > 0) {
     thinPoints(frame.points);
-    laneInput.points = keptPoints_;
-    laneInput.weights = keptWeights_;
+    start.laneInput.points = keptPoints_;
+    start.laneInput.weights = keptWeights_;
   }
   // The strategies that only change joints or welds before their first step (all but the
   // detector's) share that step's rows too.
-  simulator_.prepareFrameStartRows(rig_, laneInput);
+  simulator_.prepareFrameStartRows(rig_, start.laneInput);
   // Fitted here, not in a lane: lanes may run on other threads.
   // The keypoints bound as labelled points (the feature simulation) only when the frame starts
   // far from them: nearer, pulling bones onto the detector's noisy joints made the result
   // worse than the fitted start alone (whole animbank, desk and head-mounted).
-  const bool bindLabels = engageDetector && !warmFit;
-  const model::ModelPose* fittedStart =
-      engageDetector && fitDetectorPose(warmFit ? &startAngles_ : nullptr) ? &detectorPose_
-                                                                           : nullptr;
-  auto contextOf = [&](Lane& lane) {
-    return StrategyContext{lane.rig,
-                           lane.simulator,
-                           laneInput,
-                           settings_.substeps,
-                           frame.time,
-                           settings_.flipPeriodS,
-                           frame.detection,
-                           &startAngles_,
-                           bindLabels ? std::span<const LabelledPoint>(detectorLabels_)
-                                      : std::span<const LabelledPoint>(),
-                           fittedStart};
-  };
-  auto startLane = [&](Lane& lane) {
-    lane.rig.world().restoreState(start_);
-    lane.simulator.beginFrame(&simulator_);
-    lane.candidate.kind = lane.strategy->kind();
-    lane.candidate.error = 0.0f;
-  };
-  auto finishLane = [&](Lane& lane) {
-    if (!lane.candidate.ran || !settings_.keepCandidates) return;
-    evaluate(lane.simulator, lane.rig, frame, metricHints(lane.simulator, lane.metricHints),
-             lane.posed, lane.error);
-    lane.candidate.error = lane.error.total;
-    lane.rig.readPose(lane.candidate.pose);
-  };
-  auto runLane = [&](int index) {
-    Lane& lane = *lanes_[static_cast<std::size_t>(index)];
-    startLane(lane);
-    StrategyContext context = contextOf(lane);
-    lane.candidate.ran = runStrategy(*lane.strategy, context);
-    finishLane(lane);
-  };
+  start.bindLabels = engageDetector && !warmFit;
+  start.fittedStart = engageDetector && fitDetectorPose(warmFit ? &startAngles_ : nullptr)
+                          ? &detectorPose_
+                          : nullptr;
+}
+
+StrategyContext HandTracker::laneContext(Lane& lane, const HandFrame& frame,
+                                         const FrameStart& start) const {
+  return StrategyContext{lane.rig,
+                         lane.simulator,
+                         start.laneInput,
+                         settings_.substeps,
+                         frame.time,
+                         settings_.flipPeriodS,
+                         frame.detection,
+                         &startAngles_,
+                         start.bindLabels ? std::span<const LabelledPoint>(detectorLabels_)
+                                          : std::span<const LabelledPoint>(),
+                         start.fittedStart};
+}
+
+void HandTracker::startLane(Lane& lane) {
+  lane.rig.world().restoreState(start_);
+  lane.simulator.beginFrame(&simulator_);
+  lane.candidate.kind = lane.strategy->kind();
+  lane.candidate.error = 0.0f;
+}
+
+void HandTracker::finishLane(Lane& lane, const HandFrame& frame) {
+  if (!lane.candidate.ran || !settings_.keepCandidates) return;
+  evaluate(lane.simulator, lane.rig, frame, metricHints(lane.simulator, lane.metricHints),
+           lane.posed, lane.error);
+  lane.candidate.error = lane.error.total;
+  lane.rig.readPose(lane.candidate.pose);
+}
+
+void HandTracker::runLanes(const HandFrame& frame, const FrameStart& start) {
   const int count = static_cast<int>(lanes_.size());
   if (pool_ != nullptr) {
-    pool_->run(count, runLane);
-  } else {
-    // Up to four lanes at a time (longest runs first, so that runs side by side end
-    // together), their worlds stepped side by side: the same bits as one after the other,
-    // in less time.
-    const std::size_t n = runOrder_.size();
-    for (std::size_t k = 0; k < n; ++k) {
-      Lane& lane = *lanes_[static_cast<std::size_t>(runOrder_[k])];
+    pool_->run(count, [&](int index) {
+      Lane& lane = *lanes_[static_cast<std::size_t>(index)];
       startLane(lane);
-      laneContexts_[k].emplace(contextOf(lane));
-      laneStrategies_[k] = lane.strategy.get();
-      laneContextPointers_[k] = &*laneContexts_[k];
-    }
-    runStrategiesSideBySide(std::span(laneStrategies_.data(), n),
-                            std::span(laneContextPointers_.data(), n),
-                            std::span(laneRan_.data(), n));
-    for (std::size_t k = 0; k < n; ++k) {
-      Lane& lane = *lanes_[static_cast<std::size_t>(runOrder_[k])];
-      lane.candidate.ran = laneRan_[k];
-      finishLane(lane);
-      laneContexts_[k].reset();
-    }
+      StrategyContext context = laneContext(lane, frame, start);
+      lane.candidate.ran = runStrategy(*lane.strategy, context);
+      finishLane(lane, frame);
+    });
+    return;
   }
-  if (!settings_.keepCandidates) evaluateUntilBeaten(frame);
+  // Up to four lanes at a time (longest runs first, so that runs side by side end together),
+  // their worlds stepped side by side: the same bits as one after the other, in less time.
+  const std::size_t n = runOrder_.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    Lane& lane = *lanes_[static_cast<std::size_t>(runOrder_[k])];
+    startLane(lane);
+    laneContexts_[k].emplace(laneContext(lane, frame, start));
+    laneStrategies_[k] = lane.strategy.get();
+    laneContextPointers_[k] = &*laneContexts_[k];
+  }
+  runStrategiesSideBySide(std::span(laneStrategies_.data(), n),
+                          std::span(laneContextPointers_.data(), n), std::span(laneRan_.data(), n));
+  for (std::size_t k = 0; k < n; ++k) {
+    Lane& lane = *lanes_[static_cast<std::size_t>(runOrder_[k])];
+    lane.candidate.ran = laneRan_[k];
+    finishLane(lane, frame);
+    laneContexts_[k].reset();
+  }
+}
+
+void HandTracker::pickWinner(const HandFrame& frame, HandResult& out) {
   // The winner, in strategy order (ties to the earlier strategy).
   float bestError = std::numeric_limits<float>::infinity();
   StrategyKind bestKind = StrategyKind::Normal;
@@ -488,7 +497,7 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
       if (c.kind == bestKind) c.error = bestError;
   }
   if (best != nullptr) {
-    world.restoreState(best->rig.world().state());
+    rig_.world().restoreState(best->rig.world().state());
     bestBreakdown_ = best->error;
   } else {  // no simulation ran (all switched off): measure the state as it is
     evaluate(simulator_, frame);
@@ -498,6 +507,13 @@ void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
   const float threshold = settings_.lostErrorPerBodyM * static_cast<float>(model_->bodyCount());
   badFrames_ = bestError > threshold ? badFrames_ + 1 : 0;
   if (badFrames_ >= settings_.lostAfterFrames) tracked_ = false;
+}
+
+void HandTracker::runStrategies(const HandFrame& frame, HandResult& out) {
+  prepareFrameStart(frame);
+  runLanes(frame, frameStart_);
+  if (!settings_.keepCandidates) evaluateUntilBeaten(frame);
+  pickWinner(frame, out);
 }
 
 model::ModelPose HandTracker::canonicalPose(const HandFrame& frame, const Vec2& axisImage,

@@ -59,7 +59,28 @@ class HandTracker {
   void evaluateUntilBeaten(const HandFrame& frame);
   // The farthest 1/kMetricHeadFraction of the points go first in evaluateUntilBeaten.
   static constexpr std::size_t kMetricHeadFraction = 5;
+  // A frame's simulations, in stages: the shared frame start, every lane run, the winner.
   void runStrategies(const HandFrame& frame, HandResult& out);
+  struct Lane;
+  // What every simulation of a frame starts from.
+  struct FrameStart {
+    FrameInput laneInput;     // the points the lanes pull on (thinned by palmPointCap)
+    bool bindLabels = false;  // the detector's keypoints bound as labelled points
+    const model::ModelPose* fittedStart = nullptr;  // the model fitted to them, if any
+  };
+  // Saves the start state, maps the points at it once for every lane, fits the detector's
+  // keypoints when the frame starts away from them.
+  // Into frameStart_.
+  void prepareFrameStart(const HandFrame& frame);
+  StrategyContext laneContext(Lane& lane, const HandFrame& frame, const FrameStart& start) const;
+  void startLane(Lane& lane);
+  // With keepCandidates: the lane's full error and pose.
+  void finishLane(Lane& lane, const HandFrame& frame);
+  // Every lane on the worker pool, or side by side on the caller.
+  void runLanes(const HandFrame& frame, const FrameStart& start);
+  // The lane with the least error (the loss test may replace it) into the rig and `out`;
+  // counts bad frames toward a loss.
+  void pickWinner(const HandFrame& frame, HandResult& out);
   void acquire(const HandFrame& frame, HandResult& out);
   // The open hand placed at the cloud: fingers along axisImage (wrist -> tips), thumb
   // toward thumbSideImage, palm centre at the cloud's centroid.
@@ -120,6 +141,8 @@ class HandTracker {
   std::array<bool, kStrategyCount> laneRan_{};
   WorkerPool* pool_ = nullptr;  // runs the lanes; null: in order on the caller
   physics::WorldState start_, best_;
+  AxisHold forearmHold_;   // this frame's hold of the forearm along its axis (FrameInput::hold)
+  FrameStart frameStart_;  // this frame's (prepareFrameStart)
   model::ModelPose pose_;
   model::JointAngles startAngles_;
   model::JointAngles openAngles_;  // the acquisition pose's angles

@@ -124,17 +124,9 @@ void palmBounds(const physics::ConvexShape& shape, Vec3& lo, Vec3& hi) {
 
 }  // namespace
 
-Playground::Playground(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-Playground::~Playground() = default;
+namespace {
 
-Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
-                                                       const model::ArticulatedModel& hand) {
-  auto impl = std::make_unique<Impl>(scene, hand);
-  Impl& m = *impl;
-  m.forearm = hand.bodyIndex("forearm");
-  m.palm = hand.bodyIndex("palm");
-  if (m.forearm != hand.root() || m.palm < 0 || hand.bodies()[m.palm].parent != m.forearm)
-    return Error{"the playground hand needs the default hand's layout (forearm root, palm)"};
+physics::World makeWorld(const SceneSpec& scene) {
   physics::WorldSettings ws;
   ws.gravity = scene.gravity;
   ws.friction = scene.friction;
@@ -152,40 +144,42 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
   // speed cap (palmMaxSpeed 0.5 m/s -> 8 mm at 60 Hz), so it does not tunnel. Larger margins
   // (2.5 cm tried) make libccd's MPR pick side faces of the table for small resting objects.
   ws.contactMargin = 0.01f;
-  m.world = physics::World(ws);
+  return physics::World(ws);
+}
 
-  detail::SceneBuilder builder(m.world, m.bodies);
-  for (const ObjectSpec& o : scene.objects)
-    if (Status s = builder.addObject(o); !s) return Error{s.message()};
-  m.hinges = builder.hinges();
-
-  // The hand at the model's rest pose, far above the scene until placeHand/step.
-  model::JointAngles rest = model::zeroAngles(hand);
-  model::clampToLimits(hand, rest);
-  rest.root.p = Vec3(0, 100, 0);
-  const model::ModelPose restPose = model::forwardKinematics(hand, rest);
-  const float damping = 2.0f;  // 1/s: calms finger chatter without visible lag
-  m.handBodies.assign(hand.bodies().size(), -1);
+// The hand's bodies (all but the forearm) at restPose, far above the scene.
+std::vector<physics::BodyId> addHandBodies(const model::ArticulatedModel& hand, int forearm,
+                                           int palm, const model::ModelPose& restPose,
+                                           detail::SceneBuilder& builder, float damping) {
+  std::vector<physics::BodyId> handBodies(hand.bodies().size(), -1);
   for (std::size_t b = 0; b < hand.bodies().size(); ++b) {
-    if (static_cast<int>(b) == m.forearm) continue;
+    if (static_cast<int>(b) == forearm) continue;
     const model::Body& body = hand.bodies()[b];
     // Phalanges of 3-10 g against a 0.3 kg palm make a stiff chain the sweeps cannot settle
     // when the palm drive pushes a finger into a wall (it sank 5-10 mm); a mass floor
     // conditions the chain. Their weight is carried (compensateFingerWeight), so it only
     // adds inertia.
-    const float mass = static_cast<int>(b) == m.palm ? body.mass : std::max(body.mass, kFingerMass);
-    m.handBodies[b] =
+    const float mass = static_cast<int>(b) == palm ? body.mass : std::max(body.mass, kFingerMass);
+    handBodies[b] =
         builder.add("hand/" + body.name, body.shape, restPose.bodies[b], mass, false, damping);
   }
+  return handBodies;
+}
+
+// The hand's joints (handJoints, jointTorque: per model joint) with their limits and spring
+// drives; no self-collision.
+void addHandJoints(physics::World& world, const model::ArticulatedModel& hand, int forearm,
+                   const std::vector<physics::BodyId>& handBodies, const SceneSpec& scene,
+                   std::vector<physics::JointId>& handJoints, std::vector<float>& jointTorque) {
   const Quat toPhysics = model::modelToPhysicsFrame();
-  m.handJoints.assign(hand.joints().size(), -1);
-  m.jointTorque.assign(hand.joints().size(), 0.0f);
+  handJoints.assign(hand.joints().size(), -1);
+  jointTorque.assign(hand.joints().size(), 0.0f);
   for (std::size_t j = 0; j < hand.joints().size(); ++j) {
     const model::Joint& joint = hand.joints()[j];
-    if (joint.parent == m.forearm) continue;
+    if (joint.parent == forearm) continue;
     physics::JointDef def;
-    def.parent = m.handBodies[static_cast<std::size_t>(joint.parent)];
-    def.child = m.handBodies[static_cast<std::size_t>(joint.child)];
+    def.parent = handBodies[static_cast<std::size_t>(joint.parent)];
+    def.child = handBodies[static_cast<std::size_t>(joint.child)];
     def.anchorParent = joint.anchorParent;
     def.anchorChild = joint.anchorChild;
     def.frameParent = (joint.frame * toPhysics).normalized();
@@ -199,28 +193,32 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
         def.upper[k] += kLockedAxisPlay;
       }
     }
-    m.handJoints[j] = m.world.addJoint(def);
-    m.jointTorque[j] =
+    handJoints[j] = world.addJoint(def);
+    jointTorque[j] =
         jointTorqueFor(hand.bodies()[static_cast<std::size_t>(joint.child)].name, scene.hand);
     // A spring-damper, not a velocity servo: a servo reaches its torque cap at the smallest
     // error, so fingers and thumb squeezing an object from both sides each pushed with their
     // full cap and the object, between two unbalanced constant forces, was shaken loose
     // within a second. With a spring the digits settle where their torques balance.
     if (scene.hand.jointSpringAngle > 0.0f)
-      m.world.setJointDriveSpring(m.handJoints[j], m.jointTorque[j] / scene.hand.jointSpringAngle,
-                                  scene.hand.jointDampingRatio);
+      world.setJointDriveSpring(handJoints[j], jointTorque[j] / scene.hand.jointSpringAngle,
+                                scene.hand.jointDampingRatio);
   }
   // No self-collision: the tracker already keeps its bones apart, and poses such as a tight
   // fist touch bone to bone, where contacts would fight the drives and spring the fingers open.
   for (int a = 0; a < hand.bodyCount(); ++a)
     for (int b = a + 1; b < hand.bodyCount(); ++b)
-      if (m.handBodies[a] >= 0 && m.handBodies[b] >= 0)
-        m.world.setCollisionEnabled(m.handBodies[a], m.handBodies[b], false);
+      if (handBodies[a] >= 0 && handBodies[b] >= 0)
+        world.setCollisionEnabled(handBodies[a], handBodies[b], false);
+}
 
-  // Palm pads: ellipsoids whose centres sit just inside the palmar surface (-y), so they
-  // stand ~4 mm proud of it and leave the palm's centre slightly hollow.
+// Palm pads: ellipsoids whose centres sit just inside the palmar surface (-y), so they stand
+// ~4 mm proud of it and leave the palm's centre slightly hollow; welded to the palm.
+void addPalmPads(physics::World& world, const model::ArticulatedModel& hand, int palm,
+                 const std::vector<physics::BodyId>& handBodies, const model::ModelPose& restPose,
+                 detail::SceneBuilder& builder, float damping) {
   Vec3 lo, hi;
-  palmBounds(hand.bodies()[m.palm].shape, lo, hi);
+  palmBounds(hand.bodies()[palm].shape, lo, hi);
   const float halfWidth = 0.5f * (hi.x() - lo.x()), reach = hi.z();
   struct Pad {
     const char* name;
@@ -237,20 +235,51 @@ Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
        {0.0f, lo.y() + 0.003f, 0.78f * reach},
        {0.75f * halfWidth, 0.006f, 0.12f * reach}},
   };
-  const physics::BodyId palmId = m.handBodies[static_cast<std::size_t>(m.palm)];
+  const physics::BodyId palmId = handBodies[static_cast<std::size_t>(palm)];
   std::vector<physics::BodyId> welded = {palmId};
   for (const Pad& pad : pads) {
     const Pose padPose =
-        restPose.bodies[static_cast<std::size_t>(m.palm)] * Pose{pad.centre, Quat::Identity()};
+        restPose.bodies[static_cast<std::size_t>(palm)] * Pose{pad.centre, Quat::Identity()};
     const physics::BodyId id =
         builder.add(std::string("hand/") + pad.name, detail::ellipsoidShape(pad.semiAxes), padPose,
                     0.01f, false, damping);
-    for (physics::BodyId h : m.handBodies)
-      if (h >= 0) m.world.setCollisionEnabled(id, h, false);
-    for (physics::BodyId w : welded) m.world.setCollisionEnabled(id, w, false);
+    for (physics::BodyId h : handBodies)
+      if (h >= 0) world.setCollisionEnabled(id, h, false);
+    for (physics::BodyId w : welded) world.setCollisionEnabled(id, w, false);
     welded.push_back(id);
   }
-  m.world.weld(welded);
+  world.weld(welded);
+}
+
+}  // namespace
+
+Playground::Playground(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Playground::~Playground() = default;
+
+Result<std::unique_ptr<Playground>> Playground::create(const SceneSpec& scene,
+                                                       const model::ArticulatedModel& hand) {
+  auto impl = std::make_unique<Impl>(scene, hand);
+  Impl& m = *impl;
+  m.forearm = hand.bodyIndex("forearm");
+  m.palm = hand.bodyIndex("palm");
+  if (m.forearm != hand.root() || m.palm < 0 || hand.bodies()[m.palm].parent != m.forearm)
+    return Error{"the playground hand needs the default hand's layout (forearm root, palm)"};
+  m.world = makeWorld(scene);
+
+  detail::SceneBuilder builder(m.world, m.bodies);
+  for (const ObjectSpec& o : scene.objects)
+    if (Status s = builder.addObject(o); !s) return Error{s.message()};
+  m.hinges = builder.hinges();
+
+  // The hand at the model's rest pose, far above the scene until placeHand/step.
+  model::JointAngles rest = model::zeroAngles(hand);
+  model::clampToLimits(hand, rest);
+  rest.root.p = Vec3(0, 100, 0);
+  const model::ModelPose restPose = model::forwardKinematics(hand, rest);
+  const float damping = 2.0f;  // 1/s: calms finger chatter without visible lag
+  m.handBodies = addHandBodies(hand, m.forearm, m.palm, restPose, builder, damping);
+  addHandJoints(m.world, hand, m.forearm, m.handBodies, scene, m.handJoints, m.jointTorque);
+  addPalmPads(m.world, hand, m.palm, m.handBodies, restPose, builder, damping);
 
   m.handFlag.assign(static_cast<std::size_t>(m.world.bodyCount()), 0);
   for (SceneBody& body : m.bodies) {

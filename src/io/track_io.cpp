@@ -32,6 +32,135 @@ const char* sideName(model::Side side) {
   return side == model::Side::Right ? "right" : "left";
 }
 
+// "hand_size":{...}, (given, or estimated from frames with a fit score).
+void appendHandSize(std::string& s, const HandSizeRecord& size) {
+  s += "\"hand_size\":{\"length\":";
+  appendNumber(s, size.dimensions.length);
+  s += ",\"width\":";
+  appendNumber(s, size.dimensions.width);
+  if (size.estimated) {
+    fmt::format_to(std::back_inserter(s),
+                   ",\"source\":\"estimated\",\"frames\":{},\"fit\":", size.frames);
+    appendNumber(s, size.fitScore);
+    s += "},";
+  } else {
+    s += ",\"source\":\"given\"},";
+  }
+}
+
+// ,"keypoints21":[...] and, as asked, ,"openxr26":[...] and ,"bodies":[...] of a tracked hand.
+void appendTrackedPose(std::string& s, const track::HandResult& hand,
+                       const model::ArticulatedModel& model, const JsonOptions& o) {
+  s += ",\"keypoints21\":[";
+  for (int k = 0; k < 21; ++k) {
+    if (k > 0) s += ',';
+    appendVec(s, hand.keypoints21[static_cast<std::size_t>(k)]);
+  }
+  s += ']';
+  if (o.openxr && model.hasOpenXrJoints()) {
+    s += ",\"openxr26\":[";
+    for (int j = 0; j < 26; ++j) {
+      const auto& joint = hand.openxr26[static_cast<std::size_t>(j)];
+      if (j > 0) s += ',';
+      s += "{\"p\":";
+      appendVec(s, joint.pose.p);
+      s += ",\"q\":";
+      appendQuat(s, joint.pose.q);
+      fmt::format_to(std::back_inserter(s), ",\"r\":{:.6g}}}", joint.radius);
+    }
+    s += ']';
+  }
+  if (o.bodies) {
+    s += ",\"bodies\":[";
+    for (std::size_t b = 0; b < hand.pose.bodies.size(); ++b) {
+      if (b > 0) s += ',';
+      fmt::format_to(std::back_inserter(s), "{{\"name\":\"{}\",\"p\":", model.bodies()[b].name);
+      appendVec(s, hand.pose.bodies[b].p);
+      s += ",\"q\":";
+      appendQuat(s, hand.pose.bodies[b].q);
+      s += '}';
+    }
+    s += ']';
+  }
+}
+
+// ,"detector":{...}: the learned detector's keypoints, confidences and disagreement.
+void appendDetector(std::string& s, const track::HandResult& hand) {
+  s += ",\"detector\":{\"keypoints21\":[";
+  for (std::size_t k = 0; k < hand.detectorKeypoints21.size(); ++k) {
+    if (k > 0) s += ',';
+    appendVec(s, hand.detectorKeypoints21[k]);
+  }
+  s += "],\"confidence\":[";
+  for (std::size_t k = 0; k < hand.detectorConfidence.size(); ++k) {
+    if (k > 0) s += ',';
+    appendNumber(s, hand.detectorConfidence[k]);
+  }
+  s += "],\"disagreement\":";
+  appendNumber(s, hand.detectorDisagreement);
+  fmt::format_to(std::back_inserter(s), ",\"disagreeing_frames\":{}}}", hand.disagreeingFrames);
+}
+
+// ,"candidates":[...]: every simulation that ran, its error and (as asked) its body poses.
+void appendCandidates(std::string& s, const track::HandResult& hand, const JsonOptions& o) {
+  s += ",\"candidates\":[";
+  bool first = true;
+  for (const auto& c : hand.candidates) {
+    if (!c.ran) continue;
+    if (!first) s += ',';
+    first = false;
+    fmt::format_to(std::back_inserter(s),
+                   "{{\"simulation\":\"{}\",\"error\":", track::strategyName(c.kind));
+    appendNumber(s, c.error);
+    if (o.candidatePoses && !c.pose.bodies.empty()) {
+      s += ",\"bodies\":[";
+      for (std::size_t b = 0; b < c.pose.bodies.size(); ++b) {
+        if (b > 0) s += ',';
+        s += "{\"p\":";
+        appendVec(s, c.pose.bodies[b].p);
+        s += ",\"q\":";
+        appendQuat(s, c.pose.bodies[b].q);
+        s += '}';
+      }
+      s += ']';
+    }
+    s += '}';
+  }
+  s += ']';
+}
+
+// One hand's object.
+void appendHand(std::string& s, const track::HandResult& hand, const model::ArticulatedModel& model,
+                const JsonOptions& o) {
+  fmt::format_to(std::back_inserter(s), "{{\"side\":\"{}\",\"tracked\":{}", sideName(hand.side),
+                 hand.tracked ? "true" : "false");
+  if (hand.tracked) {
+    appendTrackedPose(s, hand, model, o);
+  } else {
+    s += ",\"keypoints21\":null";
+  }
+  s += ",\"error\":";
+  appendNumber(s, hand.error);
+  s += ",\"error_fit\":";
+  appendNumber(s, hand.fitError);
+  s += ",\"error_occlusion\":";
+  appendNumber(s, hand.occlusionError);
+  fmt::format_to(std::back_inserter(s), ",\"simulation\":\"{}\",\"acquired\":{},\"points\":{}",
+                 track::strategyName(hand.simulation), hand.acquired ? "true" : "false",
+                 hand.pointCount);
+  if (hand.detected) appendDetector(s, hand);
+  if (hand.tracked) {
+    s += ",\"fit\":{\"data_near_model\":";
+    appendNumber(s, hand.quality.dataNearModel);
+    s += ",\"model_on_hand\":";
+    appendNumber(s, hand.quality.modelOnHand);
+    fmt::format_to(std::back_inserter(s), ",\"fingertips_off_hand\":{}}}",
+                   hand.quality.fingertipsOffHand);
+  }
+  if (o.candidates) appendCandidates(s, hand, o);
+  s += '}';
+}
+
 }  // namespace
 
 std::string trackResultToJson(const track::TrackResult& r, const model::ArticulatedModel& model,
@@ -40,121 +169,11 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
   s.reserve(4096);
   fmt::format_to(std::back_inserter(s), "{{\"version\":{},\"frame\":{},\"time_ms\":{:.3f},",
                  kTrackFormatVersion, r.frame, r.timeMs);
-  if (o.handSize) {
-    const HandSizeRecord& size = *o.handSize;
-    s += "\"hand_size\":{\"length\":";
-    appendNumber(s, size.dimensions.length);
-    s += ",\"width\":";
-    appendNumber(s, size.dimensions.width);
-    if (size.estimated) {
-      fmt::format_to(std::back_inserter(s),
-                     ",\"source\":\"estimated\",\"frames\":{},\"fit\":", size.frames);
-      appendNumber(s, size.fitScore);
-      s += "},";
-    } else {
-      s += ",\"source\":\"given\"},";
-    }
-  }
+  if (o.handSize) appendHandSize(s, *o.handSize);
   s += "\"hands\":[";
   for (std::size_t h = 0; h < r.hands.size(); ++h) {
-    const track::HandResult& hand = r.hands[h];
     if (h > 0) s += ',';
-    fmt::format_to(std::back_inserter(s), "{{\"side\":\"{}\",\"tracked\":{}", sideName(hand.side),
-                   hand.tracked ? "true" : "false");
-    if (hand.tracked) {
-      s += ",\"keypoints21\":[";
-      for (int k = 0; k < 21; ++k) {
-        if (k > 0) s += ',';
-        appendVec(s, hand.keypoints21[static_cast<std::size_t>(k)]);
-      }
-      s += ']';
-      if (o.openxr && model.hasOpenXrJoints()) {
-        s += ",\"openxr26\":[";
-        for (int j = 0; j < 26; ++j) {
-          const auto& joint = hand.openxr26[static_cast<std::size_t>(j)];
-          if (j > 0) s += ',';
-          s += "{\"p\":";
-          appendVec(s, joint.pose.p);
-          s += ",\"q\":";
-          appendQuat(s, joint.pose.q);
-          fmt::format_to(std::back_inserter(s), ",\"r\":{:.6g}}}", joint.radius);
-        }
-        s += ']';
-      }
-      if (o.bodies) {
-        s += ",\"bodies\":[";
-        for (std::size_t b = 0; b < hand.pose.bodies.size(); ++b) {
-          if (b > 0) s += ',';
-          fmt::format_to(std::back_inserter(s), "{{\"name\":\"{}\",\"p\":", model.bodies()[b].name);
-          appendVec(s, hand.pose.bodies[b].p);
-          s += ",\"q\":";
-          appendQuat(s, hand.pose.bodies[b].q);
-          s += '}';
-        }
-        s += ']';
-      }
-    } else {
-      s += ",\"keypoints21\":null";
-    }
-    s += ",\"error\":";
-    appendNumber(s, hand.error);
-    s += ",\"error_fit\":";
-    appendNumber(s, hand.fitError);
-    s += ",\"error_occlusion\":";
-    appendNumber(s, hand.occlusionError);
-    fmt::format_to(std::back_inserter(s), ",\"simulation\":\"{}\",\"acquired\":{},\"points\":{}",
-                   track::strategyName(hand.simulation), hand.acquired ? "true" : "false",
-                   hand.pointCount);
-    if (hand.detected) {
-      s += ",\"detector\":{\"keypoints21\":[";
-      for (std::size_t k = 0; k < hand.detectorKeypoints21.size(); ++k) {
-        if (k > 0) s += ',';
-        appendVec(s, hand.detectorKeypoints21[k]);
-      }
-      s += "],\"confidence\":[";
-      for (std::size_t k = 0; k < hand.detectorConfidence.size(); ++k) {
-        if (k > 0) s += ',';
-        appendNumber(s, hand.detectorConfidence[k]);
-      }
-      s += "],\"disagreement\":";
-      appendNumber(s, hand.detectorDisagreement);
-      fmt::format_to(std::back_inserter(s), ",\"disagreeing_frames\":{}}}", hand.disagreeingFrames);
-    }
-    if (hand.tracked) {
-      s += ",\"fit\":{\"data_near_model\":";
-      appendNumber(s, hand.quality.dataNearModel);
-      s += ",\"model_on_hand\":";
-      appendNumber(s, hand.quality.modelOnHand);
-      fmt::format_to(std::back_inserter(s), ",\"fingertips_off_hand\":{}}}",
-                     hand.quality.fingertipsOffHand);
-    }
-    if (o.candidates) {
-      s += ",\"candidates\":[";
-      bool first = true;
-      for (const auto& c : hand.candidates) {
-        if (!c.ran) continue;
-        if (!first) s += ',';
-        first = false;
-        fmt::format_to(std::back_inserter(s),
-                       "{{\"simulation\":\"{}\",\"error\":", track::strategyName(c.kind));
-        appendNumber(s, c.error);
-        if (o.candidatePoses && !c.pose.bodies.empty()) {
-          s += ",\"bodies\":[";
-          for (std::size_t b = 0; b < c.pose.bodies.size(); ++b) {
-            if (b > 0) s += ',';
-            s += "{\"p\":";
-            appendVec(s, c.pose.bodies[b].p);
-            s += ",\"q\":";
-            appendQuat(s, c.pose.bodies[b].q);
-            s += '}';
-          }
-          s += ']';
-        }
-        s += '}';
-      }
-      s += ']';
-    }
-    s += '}';
+    appendHand(s, r.hands[h], model, o);
   }
   s += "]}";
   return s;

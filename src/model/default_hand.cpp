@@ -96,6 +96,108 @@ const char* const kJointName[4] = {"mcp", "pip", "dip", "tip"};
 
 }  // namespace
 
+namespace {
+
+// Appends to a model spec (the default hand's builders below).
+struct SpecBuilder {
+  ModelSpec& spec;
+  void body(const std::string& name, std::vector<Vec3> points) {
+    spec.bodies.push_back(BodySpec{name, std::move(points), std::nullopt, std::nullopt});
+  }
+  void joint(const std::string& parent, const std::string& child, const Vec3& anchor,
+             const Quat& frame, const Vec3& minAngle, const Vec3& maxAngle) {
+    spec.joints.push_back(
+        JointSpec{parent, child, anchor, Vec3::Zero(), frame, minAngle, maxAngle});
+  }
+  void keypoint(const std::string& name, const std::string& body, const Vec3& point, float radius) {
+    spec.keypoints.push_back(KeypointSpec{name, body, point, radius});
+  }
+};
+
+// 0 forearm: origin at the wrist joint centre, reaching 0.5 L back toward the elbow.
+void addForearm(SpecBuilder& b, float L, float W) {
+  std::vector<Vec3> points;
+  // The rounded distal end reaches past the wrist joint centre into the palm.
+  addRing(points, Vec3(0, 0, 0.12f * W), 0.24f * W, 0.12f * W, 16);
+  addRing(points, Vec3(0, 0, 0.0f), 0.34f * W, 0.19f * W, 16);
+  addRing(points, Vec3(0, 0, -0.5f * L), 0.40f * W, 0.25f * W, 16);
+  b.body("forearm", std::move(points));
+}
+
+// 1 palm: wrist section, mid-palm section and a flattened ball around each knuckle (mcp);
+// the wrist joint and the wrist and palm keypoints (MediaPipe wrist = the wrist joint centre).
+void addPalm(SpecBuilder& b, const std::array<Vec3, 4>& mcp, float L, float W) {
+  std::vector<Vec3> points;
+  addRing(points, Vec3(0, 0, -0.1f * W), 0.26f * W, 0.13f * W, 16);  // heel of the palm
+  addRing(points, Vec3(0, 0, 0), 0.34f * W, 0.19f * W, 16);
+  addRing(points, Vec3(0, -0.02f * W, 0.22f * L), 0.46f * W, 0.18f * W, 16);
+  for (size_t f = 0; f < 4; ++f) {
+    const float r = kFingers[f].radius * W;
+    addEllipsoid(points, mcp[f], Vec3(r, 1.2f * r, r), 3, 8);
+  }
+  b.body("palm", std::move(points));
+  b.joint("forearm", "palm", Vec3::Zero(), Quat::Identity(), degrees(-70, -35, 0),
+          degrees(80, 20, 0));
+  b.keypoint("wrist", "palm", Vec3::Zero(), 0.19f * W);
+  b.keypoint("palm_center", "palm", Vec3(0.5f * mcp[1].x(), -0.01f * W, 0.5f * mcp[1].z()),
+             0.18f * W);
+}
+
+// 2-4 thumb. The carpometacarpal joint sits radial and volar near the wrist; at rest the thumb
+// points distally, radially and slightly volar, its nail turned toward the radial side, so
+// flexion (about its x) sweeps it across the palm.
+void addThumb(SpecBuilder& b, float L, float W) {
+  const Vec3 cmc(0.25f * W, -0.08f * W, 0.11f * L);
+  const Vec3 z = Vec3(0.52f, -0.22f, 0.82f).normalized();
+  const Vec3 y = (Vec3(0.8f, 0.6f, 0.0f) - z * z.dot(Vec3(0.8f, 0.6f, 0.0f))).normalized();
+  Mat3 axes;
+  axes.col(0) = y.cross(z);
+  axes.col(1) = y;
+  axes.col(2) = z;
+  const Quat restFrame(axes);
+  const std::array<float, 3> lengths = {0.251f * L, 0.196f * L, 0.158f * L};
+  const std::array<float, 4> radii = {0.17f * W, 0.13f * W, 0.115f * W, 0.10f * W};
+  const char* names[3] = {"thumb_metacarpal", "thumb_proximal", "thumb_distal"};
+  const char* keys[4] = {"thumb_cmc", "thumb_mcp", "thumb_ip", "thumb_tip"};
+  for (size_t i = 0; i < 3; ++i) {
+    // The distal bone's end sphere is centred one radius short of the tip.
+    const float length = i == 2 ? lengths[i] - radii[i + 1] : lengths[i];
+    b.body(names[i], capsule(radii[i], radii[i + 1], length));
+    b.keypoint(keys[i], names[i], Vec3::Zero(), radii[i]);
+  }
+  b.keypoint(keys[3], names[2], Vec3(0, 0, lengths[2]), radii[3]);
+  b.joint("palm", names[0], cmc, restFrame, degrees(-20, -30, -20), degrees(55, 40, 30));
+  b.joint(names[0], names[1], Vec3(0, 0, lengths[0]), Quat::Identity(), degrees(-10, -10, -5),
+          degrees(60, 15, 5));
+  b.joint(names[1], names[2], Vec3(0, 0, lengths[1]), Quat::Identity(), degrees(-15, 0, 0),
+          degrees(85, 0, 0));
+}
+
+// 5-16 fingers: proximal, middle, distal phalanx each, from the knuckle at mcp.
+void addFinger(SpecBuilder& b, const FingerShape& finger, const Vec3& mcp, float L, float W) {
+  const std::string n = finger.name;
+  const float base = finger.radius * W;
+  for (size_t i = 0; i < 3; ++i) {
+    const float r0 = kTaper[i] * base;
+    const float r1 = kTaper[i + 1] * base;
+    const float length = finger.lengths[i] * L;
+    b.body(n + "_" + kPhalanx[i], capsule(r0, r1, i == 2 ? length - r1 : length));
+    b.keypoint(n + "_" + kJointName[i], n + "_" + kPhalanx[i], Vec3::Zero(), r0);
+  }
+  b.keypoint(n + "_tip", n + "_distal", Vec3(0, 0, finger.lengths[2] * L), kTaper[3] * base);
+  // Metacarpal bases converge toward the wrist (OpenXR metacarpal joints).
+  b.keypoint(n + "_cmc", "palm", Vec3(0.6f * mcp.x(), mcp.y(), 0.2f * mcp.z()), 0.8f * base);
+  const Quat splay(Eigen::AngleAxisf(finger.splayDeg * kDeg, Vec3::UnitY()));
+  b.joint("palm", n + "_proximal", mcp, splay, degrees(-25, finger.minAbductionDeg, -5),
+          degrees(95, finger.maxAbductionDeg, 5));
+  b.joint(n + "_proximal", n + "_middle", Vec3(0, 0, finger.lengths[0] * L), Quat::Identity(),
+          degrees(-5, 0, 0), degrees(110, 0, 0));
+  b.joint(n + "_middle", n + "_distal", Vec3(0, 0, finger.lengths[1] * L), Quat::Identity(),
+          degrees(-10, 0, 0), degrees(85, 0, 0));
+}
+
+}  // namespace
+
 ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   const float L = dimensions.length;
   const float W = dimensions.width;
@@ -108,108 +210,14 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   spec.collision.ignoreJointNeighbours = true;
   // The thenar base sits on the wrist: the thumb metacarpal and the forearm always touch.
   spec.collision.ignoredPairs.emplace_back("forearm", "thumb_metacarpal");
-
-  auto addBody = [&](const std::string& name, std::vector<Vec3> points) {
-    spec.bodies.push_back(BodySpec{name, std::move(points), std::nullopt, std::nullopt});
-  };
-  auto addJoint = [&](const std::string& parent, const std::string& child, const Vec3& anchor,
-                      const Quat& frame, const Vec3& minAngle, const Vec3& maxAngle) {
-    spec.joints.push_back(
-        JointSpec{parent, child, anchor, Vec3::Zero(), frame, minAngle, maxAngle});
-  };
-  auto addKeypoint = [&](const std::string& name, const std::string& body, const Vec3& point,
-                         float radius) {
-    spec.keypoints.push_back(KeypointSpec{name, body, point, radius});
-  };
-
-  // 0 forearm: origin at the wrist joint centre, reaching 0.5 L back toward the elbow.
-  {
-    std::vector<Vec3> points;
-    // The rounded distal end reaches past the wrist joint centre into the palm.
-    addRing(points, Vec3(0, 0, 0.12f * W), 0.24f * W, 0.12f * W, 16);
-    addRing(points, Vec3(0, 0, 0.0f), 0.34f * W, 0.19f * W, 16);
-    addRing(points, Vec3(0, 0, -0.5f * L), 0.40f * W, 0.25f * W, 16);
-    addBody("forearm", std::move(points));
-  }
-
-  // 1 palm: wrist section, mid-palm section and a flattened ball around each knuckle.
+  SpecBuilder builder{spec};
   std::array<Vec3, 4> mcp;
   for (size_t f = 0; f < 4; ++f)
     mcp[f] = Vec3(kFingers[f].mcpX * W, kFingers[f].mcpY * W, kFingers[f].mcpZ * L);
-  {
-    std::vector<Vec3> points;
-    addRing(points, Vec3(0, 0, -0.1f * W), 0.26f * W, 0.13f * W, 16);  // heel of the palm
-    addRing(points, Vec3(0, 0, 0), 0.34f * W, 0.19f * W, 16);
-    addRing(points, Vec3(0, -0.02f * W, 0.22f * L), 0.46f * W, 0.18f * W, 16);
-    for (size_t f = 0; f < 4; ++f) {
-      const float r = kFingers[f].radius * W;
-      addEllipsoid(points, mcp[f], Vec3(r, 1.2f * r, r), 3, 8);
-    }
-    addBody("palm", std::move(points));
-  }
-  addJoint("forearm", "palm", Vec3::Zero(), Quat::Identity(), degrees(-70, -35, 0),
-           degrees(80, 20, 0));
-
-  // Wrist and palm keypoints (MediaPipe wrist = the wrist joint centre).
-  addKeypoint("wrist", "palm", Vec3::Zero(), 0.19f * W);
-  addKeypoint("palm_center", "palm", Vec3(0.5f * mcp[1].x(), -0.01f * W, 0.5f * mcp[1].z()),
-              0.18f * W);
-
-  // 2-4 thumb. The carpometacarpal joint sits radial and volar near the wrist; at rest the
-  // thumb points distally, radially and slightly volar, its nail turned toward the radial
-  // side, so flexion (about its x) sweeps it across the palm.
-  {
-    const Vec3 cmc(0.25f * W, -0.08f * W, 0.11f * L);
-    const Vec3 z = Vec3(0.52f, -0.22f, 0.82f).normalized();
-    const Vec3 y = (Vec3(0.8f, 0.6f, 0.0f) - z * z.dot(Vec3(0.8f, 0.6f, 0.0f))).normalized();
-    Mat3 axes;
-    axes.col(0) = y.cross(z);
-    axes.col(1) = y;
-    axes.col(2) = z;
-    const Quat restFrame(axes);
-    const std::array<float, 3> lengths = {0.251f * L, 0.196f * L, 0.158f * L};
-    const std::array<float, 4> radii = {0.17f * W, 0.13f * W, 0.115f * W, 0.10f * W};
-    const char* names[3] = {"thumb_metacarpal", "thumb_proximal", "thumb_distal"};
-    const char* keys[4] = {"thumb_cmc", "thumb_mcp", "thumb_ip", "thumb_tip"};
-    for (size_t i = 0; i < 3; ++i) {
-      // The distal bone's end sphere is centred one radius short of the tip.
-      const float length = i == 2 ? lengths[i] - radii[i + 1] : lengths[i];
-      addBody(names[i], capsule(radii[i], radii[i + 1], length));
-      addKeypoint(keys[i], names[i], Vec3::Zero(), radii[i]);
-    }
-    addKeypoint(keys[3], names[2], Vec3(0, 0, lengths[2]), radii[3]);
-    addJoint("palm", names[0], cmc, restFrame, degrees(-20, -30, -20), degrees(55, 40, 30));
-    addJoint(names[0], names[1], Vec3(0, 0, lengths[0]), Quat::Identity(), degrees(-10, -10, -5),
-             degrees(60, 15, 5));
-    addJoint(names[1], names[2], Vec3(0, 0, lengths[1]), Quat::Identity(), degrees(-15, 0, 0),
-             degrees(85, 0, 0));
-  }
-
-  // 5-16 fingers: proximal, middle, distal phalanx each.
-  for (size_t f = 0; f < 4; ++f) {
-    const FingerShape& finger = kFingers[f];
-    const std::string n = finger.name;
-    const float base = finger.radius * W;
-    for (size_t i = 0; i < 3; ++i) {
-      const float r0 = kTaper[i] * base;
-      const float r1 = kTaper[i + 1] * base;
-      const float length = finger.lengths[i] * L;
-      addBody(n + "_" + kPhalanx[i], capsule(r0, r1, i == 2 ? length - r1 : length));
-      addKeypoint(n + "_" + kJointName[i], n + "_" + kPhalanx[i], Vec3::Zero(), r0);
-    }
-    addKeypoint(n + "_tip", n + "_distal", Vec3(0, 0, finger.lengths[2] * L), kTaper[3] * base);
-    // Metacarpal bases converge toward the wrist (OpenXR metacarpal joints).
-    addKeypoint(n + "_cmc", "palm", Vec3(0.6f * mcp[f].x(), mcp[f].y(), 0.2f * mcp[f].z()),
-                0.8f * base);
-
-    const Quat splay(Eigen::AngleAxisf(finger.splayDeg * kDeg, Vec3::UnitY()));
-    addJoint("palm", n + "_proximal", mcp[f], splay, degrees(-25, finger.minAbductionDeg, -5),
-             degrees(95, finger.maxAbductionDeg, 5));
-    addJoint(n + "_proximal", n + "_middle", Vec3(0, 0, finger.lengths[0] * L), Quat::Identity(),
-             degrees(-5, 0, 0), degrees(110, 0, 0));
-    addJoint(n + "_middle", n + "_distal", Vec3(0, 0, finger.lengths[1] * L), Quat::Identity(),
-             degrees(-10, 0, 0), degrees(85, 0, 0));
-  }
+  addForearm(builder, L, W);
+  addPalm(builder, mcp, L, W);
+  addThumb(builder, L, W);
+  for (size_t f = 0; f < 4; ++f) addFinger(builder, kFingers[f], mcp[f], L, W);
 
   // Joint order must match the body order (joint j has child j + 1): thumb joints were added
   // before the finger joints, as the bodies were.

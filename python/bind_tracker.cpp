@@ -225,7 +225,8 @@ class PyTracker {
  public:
   PyTracker(const py::object& camera, int hands, const py::object& handSize,
             const py::object& detector, int threads, bool perFrame, std::optional<double> fps,
-            const py::object& modelFile, const py::object& frames, int handSizeFrames) {
+            const py::object& modelFile, const py::object& frames, int handSizeFrames,
+            bool behindUser) {
     const CameraSpec spec = cameraSpec(camera);
     intrinsics_ = spec.intrinsics;
     fps_ = fps ? *fps : spec.fps.value_or(30.0);
@@ -282,6 +283,7 @@ class PyTracker {
     settings.hands = hands;
     settings.threads = threads;
     settings.perFrame = perFrame;
+    if (behindUser) settings.split.placement = CameraPlacement::kBehindUser;
     if (spec.minRangeM && *spec.minRangeM > 0.0f)
       settings.cloud.segmentation.sensorMinRangeM = *spec.minRangeM;
     if (py::isinstance<py::bool_>(detector)) {
@@ -488,15 +490,18 @@ void bindTracker(py::module_& m) {
                         "model, settings and learned detector, so the same results frame by "
                         "frame).")
       .def(py::init<const py::object&, int, const py::object&, const py::object&, int, bool,
-                    std::optional<double>, const py::object&, const py::object&, int>(),
+                    std::optional<double>, const py::object&, const py::object&, int, bool>(),
            py::arg("camera"), py::arg("hands") = 1, py::arg("hand_size") = py::none(),
            py::arg("detector") = true, py::arg("threads") = 1, py::arg("per_frame") = false,
            py::arg("fps") = py::none(), py::arg("model_file") = py::none(),
            py::arg("frames") = py::none(), py::arg("hand_size_frames") = kDefaultSizeFrames,
+           py::arg("behind_user") = false,
            "camera: a Camera, a dict (width, height, fx, fy, cx, cy[, fps][, min_range_m]) or a "
            "Sequence / SyntheticClip (its camera, fps and near range: min_range_m, m, tells the "
            "segmentation where the sensor cuts off an arm reaching past it).\n"
-           "hands: 1 or 2. hand_size: None (0.19, 0.085) or (length, width) of the built-in hand, "
+           "hands: 1 or 2 (behind_user: the camera looks along the user's view, worn on the head, "
+           "so their left hand is on the image's left; default: it faces the user). hand_size: "
+           "None (0.19, 0.085) or (length, width) of the built-in hand, "
            "m; a HandSize (estimate_hand_size()); or 'auto': estimated as `dynahand track "
            "--hand-size auto` does, from the first hand_size_frames (10..600, default 30) "
            "frames of `frames` (default: camera, when it is a Sequence or SyntheticClip; bare "

@@ -125,6 +125,7 @@ class Tracker:
         model_file: Optional[_Path] = None,
         frames: Optional[_FramesLike] = None,
         hand_size_frames: int = 30,
+        behind_user: bool = False,
     ) -> None:
         """hand_size: None (0.19, 0.085), (length, width) in m, a HandSize
         (estimate_hand_size()), or "auto": estimated as `dynahand track --hand-size auto` from

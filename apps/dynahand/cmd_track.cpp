@@ -28,6 +28,7 @@ struct TrackOptions {
   int handSizeFrames = 30;
   int hands = 1, threads = 1, start = 0, frames = -1;
   bool perFrame = false, candidates = false;
+  bool behindUser = false;  // --behind-user: two hands, camera worn or behind the user
   std::vector<std::string> disable;
   bool noDetector = false;  // --no-detector
   std::string detector;     // --detector FILE (empty: the shipped weights)
@@ -110,6 +111,7 @@ void readFrame(FrameInput& in, const TrackOptions& o, int f, DepthFrame& out) {
 track::TrackerSettings trackerSettings(const TrackOptions& o, const SequenceInfo& info) {
   track::TrackerSettings settings;
   settings.hands = o.hands;
+  if (o.behindUser) settings.split.placement = CameraPlacement::kBehindUser;
   settings.perFrame = o.perFrame;
   settings.threads = o.threads;
   settings.keepCandidates = o.candidates;
@@ -389,6 +391,10 @@ const CommandRegistration kTrackCommand{Command{
       sub.add_option("--init", o->init,
                      "gt (ground truth of the first frame), auto, or a pose JSONL file");
       sub.add_option("--hands", o->hands, "hands to track")->check(CLI::IsMember({1, 2}));
+      sub.add_flag("--behind-user", o->behindUser,
+                   "two hands: the camera looks along the user's view (worn on the head, or "
+                   "behind them), so their left hand is on the image's left (default: the "
+                   "camera faces the user)");
       sub.add_option(
              "--threads", o->threads,
              "threads the simulations of a frame (and --hand-size auto's candidate models) run on "

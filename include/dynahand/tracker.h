@@ -16,6 +16,7 @@
 
 #include "dynahand/cloud.h"
 #include "dynahand/depth_frame.h"
+#include "dynahand/hand_split.h"
 #include "dynahand/model.h"
 #include "dynahand/model_pose.h"
 
@@ -34,7 +35,11 @@ enum class StrategyKind : int {
   FeatureDetection,
   DetectorFit
 };
-inline constexpr int kStrategyCount = 6;      ///< the number of StrategyKind values
+inline constexpr int kStrategyCount = 6;  ///< the number of StrategyKind values
+/// m: with two hands, the second is looked for up to this far behind the first (unless
+/// CloudConfig's segmentation.secondRegionDepthBandM says otherwise): hands held out side by
+/// side, one somewhat nearer.
+inline constexpr float kTwoHandDepthBandM = 0.2f;
 const char* strategyName(StrategyKind kind);  ///< "normal", "gross_motion", ...
 
 /// The learned keypoint detector (dynahand/detector.h) and how the tracker uses it.
@@ -82,6 +87,12 @@ struct TrackerSettings {
   /// or a hand whose nearest point is a fingertip loses its far fingertips to the ball.
   bool scaleSegmentationToHand = true;
   int hands = 1;  ///< 1, or 2 (k-means split, paper "Tracking of Multiple Hands")
+  /// Two hands: how the points are split between them, and which side of the image the user's
+  /// left hand is on (split.placement: kFacingUser for a camera looking at the user,
+  /// kBehindUser for one worn on the head or looking along the user's view). With two hands and
+  /// cloud.segmentation.secondRegionDepthBandM 0, the second hand is looked for up to
+  /// kTwoHandDepthBandM behind the first.
+  HandSplitConfig split;
   /// Threads the simulations of a frame run on (1: the caller's only). Results are the same
   /// bits for any count: each simulation has its own copy of the hand.
   int threads = 1;

@@ -150,8 +150,9 @@ struct CloudPipeline::Impl {
     int firstSeed = -1;                          // its seed cell
     int regionCount = 0;                         // coarse volumes accepted: 0, 1 or 2
     int minI = 0, maxI = 0, minJ = 0, maxJ = 0;  // their cell box
-    Vec3 handEnd = Vec3::Zero();                 // the limb's free end, when haveHandEnd
-    bool haveHandEnd = false;
+    // Each region's limb's free end, when haveHandEnd (region 2's with two regions).
+    Vec3 handEnd[2] = {Vec3::Zero(), Vec3::Zero()};
+    bool haveHandEnd[2] = {false, false};
     PixelBox box;           // filtered and segmented
     int stride = 1;         // pixels between working samples
     int segmentFactor = 1;  // segmentation samples every segmentFactor working samples
@@ -444,7 +445,8 @@ bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
     s.regionCount = 1;
   }
   if (s.regionCount == 0) return false;
-  s.haveHandEnd = findLimbEnd(s.coarse, s.firstSeed, s.first, s.handEnd);
+  s.haveHandEnd[0] = findLimbEnd(s.coarse, s.firstSeed, s.first, s.handEnd[0]);
+  s.haveHandEnd[1] = false;
   s.minI = s.first.minI;
   s.maxI = s.first.maxI;
   s.minJ = s.first.minJ;
@@ -460,6 +462,8 @@ bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
       if (r.areaM2 >= seg.minAreaM2 && !r.inFrontOfSurface && !r.touchesEarlierRegion) {
         coarseGrower.accept(cloud::kRegion2);
         s.regionCount = 2;
+        // The second hand's limb too (a forearm nearer the camera than its hand).
+        s.haveHandEnd[1] = findLimbEnd(s.coarse, seed, r, s.handEnd[1]);
         s.minI = std::min(s.minI, r.minI);
         s.maxI = std::max(s.maxI, r.maxI);
         s.minJ = std::min(s.minJ, r.minJ);
@@ -585,12 +589,13 @@ void CloudPipeline::Impl::growFineRegions(Search& s, const DepthGrid& fine) {
                 });
       if (seed < 0) break;
       GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
-      const Vec3 toNearest = g.nearestPoint - s.handEnd;
-      if (r == 0 && s.haveHandEnd && toNearest.norm() > seg.handRadiusM) {
+      const Vec3 toNearest = g.nearestPoint - s.handEnd[r];
+      if (s.haveHandEnd[r] && toNearest.norm() > seg.handRadiusM) {
         // The ball around the nearest sample leaves out the limb's free end: that sample is
         // on a forearm pointing at the camera. The ball moves toward the free end until it
         // holds it with a quarter radius to spare.
-        const Vec3 centre = s.handEnd + toNearest.normalized() * (kEndInsideBall * seg.handRadiusM);
+        const Vec3 centre =
+            s.handEnd[r] + toNearest.normalized() * (kEndInsideBall * seg.handRadiusM);
         const int endSeed = fineGrower.closestFreeCell(centre);
         if (endSeed >= 0) g = fineGrower.grow(endSeed, seg.step, seg.handRadiusM, seg.minAreaM2);
       }
@@ -812,8 +817,8 @@ void CloudPipeline::Impl::summariseSegment(const Search& s, const Scan& scan,
   segment.areaM2 = s.fineRegion[0].areaM2;
   if (s.fineFound[1]) segment.areaM2 += s.fineRegion[1].areaM2;
   segment.centroid = scan.segmentedSum / static_cast<float>(scan.segmentedSamples);
-  segment.limbEndFound = s.haveHandEnd;
-  segment.limbEnd = s.haveHandEnd ? s.handEnd : Vec3::Zero();
+  segment.limbEndFound = s.haveHandEnd[0];
+  segment.limbEnd = s.haveHandEnd[0] ? s.handEnd[0] : Vec3::Zero();
   const GrownRegion& hand = s.fineRegion[0];
   segment.cutPixelCount = hand.cutCount;
   if (hand.cutCount > 0) {

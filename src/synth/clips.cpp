@@ -246,8 +246,11 @@ std::vector<ClipDefinition> makeClips() {
                {turnKeyTrack()}});
   {
     std::vector<Key> right = openCloseTrack(), left = waveTrack();
-    for (Key& k : right) k.offset.x() += 0.11f;
-    for (Key& k : left) k.offset.x() += 0.11f;  // mirrored to the other side
+    // 11 cm to the ulnar side (-x, the hand frame's radial axis): away from the body's midline
+    // for either hand (the left hand's frame is mirrored), so that each arm stays on its own
+    // side from its shoulder.
+    for (Key& k : right) k.offset.x() -= 0.11f;
+    for (Key& k : left) k.offset.x() -= 0.11f;
     c.push_back({{"two-hands", "right hand opening and closing while the left waves", 2.6f, 2},
                  {right, left}});
   }

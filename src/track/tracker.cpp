@@ -70,6 +70,7 @@ struct Tracker::Impl {
         right(rightHand),
         left(model::mirrorModel(rightHand)),
         pipeline(k, s.cloud),
+        splitter(s.split),
         pool(s.threads > 1 ? std::make_unique<WorkerPool>(s.threads) : nullptr) {}
 };
 
@@ -123,6 +124,8 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
   const float referenceLength = model::HandDimensions{}.length;
   if (s.scaleSegmentationToHand && length > referenceLength)
     s.cloud.segmentation.handRadiusM *= length / referenceLength;
+  if (s.hands == 2 && s.cloud.segmentation.secondRegionDepthBandM <= 0.0f)
+    s.cloud.segmentation.secondRegionDepthBandM = kTwoHandDepthBandM;
   auto impl = std::make_unique<Impl>(rightHand, intrinsics, s);
   impl->keypointDetector = std::move(keypointDetector);
   auto right = HandTracker::create(impl->right, model::Side::Right, s, impl->pool.get());

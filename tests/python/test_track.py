@@ -109,3 +109,15 @@ def test_two_hands_and_results():
     assert h.body_error.shape == (17,) and len(tracker.body_names) == 17
     assert len(dynahand.Tracker.openxr_joint_names) == 26
     assert tracker.frames == 2 and tracker.hand_size[0] == np.float32(0.19)
+
+
+def test_two_hands_seen_from_the_head():
+    """behind_user: the user's left hand is on the image's left (a head-mounted camera)."""
+    clip = dynahand.synth("two-hands", frames=12, placement="head")
+    tracker = dynahand.Tracker(clip, hands=2, behind_user=True)
+    for depth, scale, _ in clip:
+        hands = tracker.track(depth, scale)
+    for h, side in ((0, "right"), (1, "left")):
+        assert hands[h].side == side and hands[h].tracked
+        error = np.linalg.norm(hands[h].keypoints21 - clip.ground_truth(11, hand=h), axis=1)
+        assert error.mean() < 0.05, (side, error.mean())

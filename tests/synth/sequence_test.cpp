@@ -227,8 +227,16 @@ TEST(SyntheticSequence, TwoHandsAreARightAndAMirroredLeftHand) {
   ASSERT_EQ(frame.hands.size(), 2u);
   EXPECT_EQ(frame.hands[0].side, model::Side::Right);
   EXPECT_EQ(frame.hands[1].side, model::Side::Left);
-  EXPECT_GT(frame.hands[0].keypoints[0].x(), 0.05f);  // right hand on the image's right
-  EXPECT_LT(frame.hands[1].keypoints[0].x(), -0.05f);
+  // The desk camera faces the user: their right hand is on the image's left, each arm on its
+  // own side of the body (not crossed); a head-mounted camera sees it on the right.
+  EXPECT_LT(frame.hands[0].keypoints[0].x(), -0.05f);
+  EXPECT_GT(frame.hands[1].keypoints[0].x(), 0.05f);
+  SynthOptions head = optionsFor("two-hands");
+  head.scene.placement = CameraPlacement::HeadMounted;
+  Result<SyntheticSequence> fromHead = SyntheticSequence::create(head);
+  ASSERT_TRUE(fromHead.ok());
+  EXPECT_GT(fromHead->frame(0).hands[0].keypoints[0].x(), 0.05f);
+  EXPECT_LT(fromHead->frame(0).hands[1].keypoints[0].x(), -0.05f);
   int left = 0, right = 0;
   for (const PixelLabel l : seq->labels()) {
     right += l == PixelLabel::Hand0;

@@ -114,6 +114,53 @@ TEST(Tracker, IsDeterministicForAnyThreadCount) {
   EXPECT_EQ(winners[0], winners[1]) << "keeping the candidates changed the tracking";
 }
 
+// Both hands of the two-hands clip (right opening and closing, left waving), acquired
+// automatically, each tracked by the model of its side: seen by a camera facing the user, and by
+// one worn on the head (the user's left hand then on the image's left, split.placement).
+TEST(Tracker, TwoHandsTrackedFromTheDeskAndFromTheHead) {
+  for (const bool head : {false, true}) {
+    SCOPED_TRACE(head ? "head-mounted" : "desk");
+    synth::SynthOptions o;
+    o.clip = "two-hands";
+    o.profile = "tof";
+    o.frameCount = 60;
+    o.scene.placement =
+        head ? synth::CameraPlacement::HeadMounted : synth::CameraPlacement::DeskFacing;
+    auto seq = synth::SyntheticSequence::create(o);
+    ASSERT_TRUE(seq.ok()) << seq.message();
+    TrackerSettings settings;
+    settings.hands = 2;
+    if (head) settings.split.placement = CameraPlacement::kBehindUser;
+    auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
+    ASSERT_TRUE(tracker.ok()) << tracker.message();
+    double total[2] = {0, 0};
+    int tracked[2] = {0, 0};
+    for (int f = 0; f < o.frameCount; ++f) {
+      const synth::SyntheticFrame& frame = seq->frame(f);
+      const TrackResult& r = (*tracker)->track(frame.depth);
+      ASSERT_EQ(r.hands.size(), 2u);
+      for (std::size_t h = 0; h < 2; ++h) {
+        if (!r.hands[h].tracked) continue;
+        // hands[0] is the right hand, as the clip's hand 0.
+        EXPECT_EQ(r.hands[h].side, h == 0 ? model::Side::Right : model::Side::Left);
+        double err = 0;
+        for (std::size_t k = 0; k < 21; ++k)
+          err +=
+              static_cast<double>((r.hands[h].keypoints21[k] - frame.hands[h].keypoints[k]).norm());
+        total[h] += err / 21.0;
+        ++tracked[h];
+      }
+    }
+    for (int h = 0; h < 2; ++h) {
+      const double meanMm = tracked[h] > 0 ? 1000.0 * total[h] / tracked[h] : 0.0;
+      std::printf("%s hand %d: tracked %d/%d frames, mean 21-keypoint error %.1f mm\n",
+                  head ? "head-mounted" : "desk", h, tracked[h], o.frameCount, meanMm);
+      EXPECT_GE(tracked[h], o.frameCount - 5);
+      EXPECT_LT(meanMm, head ? 35.0 : 12.0);
+    }
+  }
+}
+
 TEST(Tracker, EmptyFramesMeanLostNotACrash) {
   synth::SynthOptions o;
   o.frameCount = 1;

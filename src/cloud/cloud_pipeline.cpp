@@ -87,7 +87,7 @@ struct CloudPipeline::Impl {
   std::vector<int> boxColumnCell;        // (box width) coarse column of each box column
   std::vector<int> boxRowCell;           // (box height) coarse row of each box row
   std::vector<Vec2> hullPoints;          // row extremes of the segment, normalised image plane
-  std::vector<float> segmentDepth;       // every other working sample of the box, m (see run)
+  std::vector<float> segmentDepth;       // every other working sample of the box, m (segmentFine)
   std::vector<float> boxColumnX;         // (box width) x / z of each box column
   std::vector<VoxelGrid::Key> rowKeys;   // (box width) voxel of each sample of a row
   std::vector<int> columnVoxel;          // (box width) voxel of the last run over each column

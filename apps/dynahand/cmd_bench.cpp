@@ -1,5 +1,5 @@
 // dynahand bench: the motion suite and the standard accuracy and speed suite
-// (include/dynahand/bench_suite.h), printed as tables and written as Markdown
+// (src/tools/include/dynahand/tools/bench_suite.h), printed as tables and written as Markdown
 // (docs/benchmarks.md by default for `--suite all`); and the soak (soak.h): track or serve
 // for a given time, resident memory and frame time at the start and the end.
 #include <sys/utsname.h>
@@ -15,9 +15,9 @@
 #include <fmt/format.h>
 
 #include "dynahand/atomic_file.h"
-#include "dynahand/bench_suite.h"
 #include "dynahand/command.h"
 #include "dynahand/progress.h"
+#include "dynahand/tools/bench_suite.h"
 #include "soak.h"
 
 namespace dynahand::cli {
@@ -51,7 +51,8 @@ std::filesystem::path defaultDataDir() {
 }
 
 constexpr const char* kMotionIntro =
-    "The motion suite (`dynahand bench --suite motion`; include/dynahand/bench_suite.h): the "
+    "The motion suite (`dynahand bench --suite motion`; "
+    "src/tools/include/dynahand/tools/bench_suite.h): the "
     "headline numbers. Items: every continuous segment of the original authors' "
     "`animbank.pose` (split where the wrist keypoint moves more than 4 cm or any keypoint more "
     "than 5.5 cm between frames: 12 cuts; of the 14 the data's README lists, 194 and 1769 move "

@@ -9,9 +9,9 @@
 
 #include "dynahand/command.h"
 #include "dynahand/metrics.h"
-#include "dynahand/overlay.h"
 #include "dynahand/progress.h"
 #include "dynahand/synth.h"
+#include "dynahand/tools/overlay.h"
 #include "dynahand/tracker.h"
 
 namespace dynahand::cli {

@@ -12,9 +12,9 @@
 #include "dynahand/atomic_file.h"
 #include "dynahand/command.h"
 #include "dynahand/model.h"
-#include "dynahand/overlay.h"
 #include "dynahand/progress.h"
 #include "dynahand/sequence.h"
+#include "dynahand/tools/overlay.h"
 #include "dynahand/track_io.h"
 
 #ifdef DYNAHAND_HAVE_VIDEOIO

@@ -36,10 +36,8 @@
 #include "dynahand/detector.h"
 #include "dynahand/detector_data.h"
 // The tracker, its outputs and their evaluation (pictures, the benchmark suites).
-#include "dynahand/bench_suite.h"
 #include "dynahand/keypoint_io.h"
 #include "dynahand/metrics.h"
-#include "dynahand/overlay.h"
 #include "dynahand/track_io.h"
 #include "dynahand/tracker.h"
 // The physics playground.

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <set>
 
-#include "dynahand/bench_suite.h"
 #include "dynahand/synth.h"
+#include "dynahand/tools/bench_suite.h"
 #include "test_support.h"
 
 namespace dynahand::eval {

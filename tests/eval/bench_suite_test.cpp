@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <set>
 
-#include "dynahand/bench_suite.h"
 #include "dynahand/synth.h"
+#include "dynahand/tools/bench_suite.h"
 
 namespace dynahand::eval {
 namespace {

@@ -1,10 +1,10 @@
-#include "dynahand/overlay.h"
+#include "dynahand/tools/overlay.h"
 
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "eval/rgb_mat.h"
+#include "tools/rgb_mat.h"
 
 namespace dynahand::eval {
 

@@ -1,4 +1,4 @@
-#include "dynahand/bench_suite.h"
+#include "dynahand/tools/bench_suite.h"
 
 #include <fmt/format.h>
 

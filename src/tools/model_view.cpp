@@ -4,8 +4,8 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
-#include "dynahand/overlay.h"
-#include "eval/rgb_mat.h"
+#include "dynahand/tools/overlay.h"
+#include "tools/rgb_mat.h"
 
 namespace dynahand::eval {
 

@@ -6,7 +6,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "dynahand/overlay.h"
+#include "dynahand/tools/overlay.h"
 
 namespace dynahand::eval::detail {
 

@@ -11,16 +11,16 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/json_util.h"
 #include "dynahand/model_intel.h"
-#include "model/json_util.h"
 
 namespace dynahand::model {
 namespace {
 
-using detail::FormatError;
+using jsonread::FormatError;
 using nlohmann::json;
 
-using detail::degreesToRadians;
+using jsonread::degreesToRadians;
 
 const char* const kHandBodyNames[17] = {
     "forearm",        "palm",          "thumb_metacarpal", "thumb_proximal",  "thumb_distal",
@@ -39,8 +39,8 @@ int index(const json& v, const std::string& path, size_t count) {
 // Quaternion stored x, y, z, w.
 Quat quatXyzw(const json& v, const std::string& path) {
   if (!v.is_array() || v.size() != 4) throw FormatError{path, "expected [x, y, z, w]"};
-  return Quat(detail::number(v[3], path + "[3]"), detail::number(v[0], path + "[0]"),
-              detail::number(v[1], path + "[1]"), detail::number(v[2], path + "[2]"));
+  return Quat(jsonread::number(v[3], path + "[3]"), jsonread::number(v[0], path + "[0]"),
+              jsonread::number(v[1], path + "[1]"), jsonread::number(v[2], path + "[2]"));
 }
 
 struct ParsedIntel {
@@ -49,7 +49,7 @@ struct ParsedIntel {
 };
 
 ParsedIntel parseIntel(const json& doc, const IntelImportOptions& options) {
-  using namespace detail;
+  using namespace jsonread;
   ParsedIntel parsed;
   ModelSpec& spec = parsed.spec;
   objectAt(doc, "(document)");

@@ -10,23 +10,23 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/json_util.h"
 #include "dynahand/model.h"
-#include "model/json_util.h"
 
 namespace dynahand::model {
 namespace {
 
-using detail::FormatError;
+using jsonread::FormatError;
 using nlohmann::json;
 
-using detail::degreesToRadians;
-using detail::kDegPerRad;
-using detail::num;
+using jsonread::degreesToRadians;
+using jsonread::kDegPerRad;
+using jsonread::num;
 
 constexpr const char* kModelFormatName = "dynahand-model";
 
 Handedness parseHandedness(const json& v, const std::string& path) {
-  const std::string s = detail::string(v, path);
+  const std::string s = jsonread::string(v, path);
   if (s == "right") return Handedness::Right;
   if (s == "left") return Handedness::Left;
   if (s == "none") return Handedness::None;
@@ -46,7 +46,7 @@ const char* handednessName(Handedness h) {
 }
 
 ModelSpec parseSpec(const json& doc) {
-  using namespace detail;
+  using namespace jsonread;
   ModelSpec spec;
   if (!doc.is_object()) throw FormatError{"(document)", "expected a JSON object"};
   checkKeys(doc, "",

@@ -7,21 +7,21 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/json_util.h"
 #include "dynahand/model_pose.h"
-#include "model/json_util.h"
 
 namespace dynahand::model {
 namespace {
 
-using detail::FormatError;
+using jsonread::FormatError;
 using nlohmann::json;
 
-using detail::num;
+using jsonread::num;
 
 constexpr const char* kPoseFormatName = "dynahand-pose";
 
 void parseHeader(const json& doc, PoseSequence& seq) {
-  using namespace detail;
+  using namespace jsonread;
   objectAt(doc, "(header)");
   checkKeys(doc, "", {"format", "version", "bodies"});
   const std::string format = string(field(doc, "", "format"), "format");
@@ -39,7 +39,7 @@ void parseHeader(const json& doc, PoseSequence& seq) {
 }
 
 ModelPose parseFrame(const json& doc, size_t expectedFrame, size_t bodyCount) {
-  using namespace detail;
+  using namespace jsonread;
   objectAt(doc, "(frame)");
   checkKeys(doc, "", {"frame", "poses"});
   const json& frame = field(doc, "", "frame");

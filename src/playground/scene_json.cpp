@@ -7,20 +7,20 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/json_util.h"
 #include "dynahand/playground.h"
-#include "model/json_util.h"
 
 namespace dynahand::playground {
 namespace {
 
-using model::detail::arrayAt;
-using model::detail::checkKeys;
-using model::detail::childPath;
-using model::detail::field;
-using model::detail::FormatError;
-using model::detail::number;
-using model::detail::objectAt;
-using model::detail::vec3;
+using jsonread::arrayAt;
+using jsonread::checkKeys;
+using jsonread::childPath;
+using jsonread::field;
+using jsonread::FormatError;
+using jsonread::number;
+using jsonread::objectAt;
+using jsonread::vec3;
 using Json = nlohmann::json;
 
 constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
@@ -89,10 +89,10 @@ ObjectSpec readObject(const Json& j, const std::string& path) {
       {"name", "kind", "static", "position", "rotationDeg", "mass", "size", "radius", "length",
        "capRadius", "capLength", "points", "axis", "limitsDeg", "startDeg", "damping", "links"});
   ObjectSpec o;
-  o.name = model::detail::string(field(j, path, "name"), childPath(path, "name"));
+  o.name = jsonread::string(field(j, path, "name"), childPath(path, "name"));
   if (o.name.empty() || o.name.find('/') != std::string::npos)
     throw FormatError{childPath(path, "name"), "must be non-empty and contain no '/'"};
-  o.kind = kindFromName(model::detail::string(field(j, path, "kind"), childPath(path, "kind")),
+  o.kind = kindFromName(jsonread::string(field(j, path, "kind"), childPath(path, "kind")),
                         childPath(path, "kind"));
   if (const Json* v = optional(j, "static")) {
     if (!v->is_boolean()) throw FormatError{childPath(path, "static"), "expected true or false"};
@@ -153,7 +153,7 @@ SceneSpec readScene(const Json& root) {
   checkKeys(root, "",
             {"format", "version", "name", "gravity", "camera", "stepHz", "friction", "hand",
              "navigation", "objects"});
-  if (model::detail::string(field(root, "", "format"), "format") != "dynahand-scene")
+  if (jsonread::string(field(root, "", "format"), "format") != "dynahand-scene")
     throw FormatError{"format", "expected \"dynahand-scene\""};
   const Json& version = field(root, "", "version");
   if (!version.is_number_integer() || version.get<int>() < 1)
@@ -163,7 +163,7 @@ SceneSpec readScene(const Json& root) {
                                      " is newer than this reader (" +
                                      std::to_string(kSceneFormatVersion) + ")"};
   SceneSpec s;
-  if (const Json* v = optional(root, "name")) s.name = model::detail::string(*v, "name");
+  if (const Json* v = optional(root, "name")) s.name = jsonread::string(*v, "name");
   if (const Json* v = optional(root, "gravity")) s.gravity = vec3(*v, "gravity");
   {
     const Json& c = objectAt(field(root, "", "camera"), "camera");

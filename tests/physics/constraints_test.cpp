@@ -377,5 +377,18 @@ TEST(BodyDrive, ForceLimitBoundsAcceleration) {
   EXPECT_GT(w.linearVelocity(b).x(), 0.9f * maxForce * t);
 }
 
+TEST(BodyDrive, ClearedDriveStopsPulling) {
+  BodyId b = 0;
+  World w = freeBoxWorld(&b);
+  w.setBodyDrive(b, Pose{Vec3(1, 0, 0), Quat::Identity()}, 0.5f, 1.0f);
+  for (int i = 0; i < 30; ++i) w.step(kDt);
+  const float vx = w.linearVelocity(b).x();
+  ASSERT_GT(vx, 0.0f);
+  w.clearBodyDrive(b);
+  for (int i = 0; i < 30; ++i) w.step(kDt);
+  // No force any more: the box coasts at the velocity the drive had given it.
+  EXPECT_NEAR(w.linearVelocity(b).x(), vx, 1e-3f * vx);
+}
+
 }  // namespace
 }  // namespace dynahand::physics

@@ -1,5 +1,6 @@
-// Internal: typed access to parsed JSON with the JSON path in every error. Used by the model
-// and pose readers; FormatError is caught at the reader's top level and turned into an Error.
+// Internal: typed access to parsed JSON with the JSON path in every error. Used by the
+// model, pose and scene readers; FormatError is caught at the reader's top level and turned
+// into an Error.
 #pragma once
 
 #include <charconv>
@@ -12,7 +13,7 @@
 
 #include "dynahand/core.h"
 
-namespace dynahand::model::detail {
+namespace dynahand::jsonread {
 
 struct FormatError {
   std::string path;     // e.g. "bodies[5].vertices[2]"
@@ -90,4 +91,4 @@ inline Quat quatWxyz(const nlohmann::json& v, const std::string& path) {
               number(v[3], path + "[3]"));
 }
 
-}  // namespace dynahand::model::detail
+}  // namespace dynahand::jsonread

@@ -289,14 +289,6 @@ class World {
 
   /// Advances the world by dt seconds (> 0): one full solver step (see the file comment).
   void step(float dt);
-  /// step() prepares the surface rows four at a time with SSE where the CPU has it (on by
-  /// default), else one by one; both give identical bits. false forces the narrow path (for
-  /// tests comparing the two); returns whether the wide path is now in use.
-  static bool useWideSurfacePrepare(bool enabled);
-  /// step() solves the surface rows eight at a time with AVX where the CPU has it (on by
-  /// default), else one by one; both give identical bits. false forces the one-by-one path
-  /// (for tests comparing the two); returns whether the vector path is now in use.
-  static bool useVectorSweeps(bool enabled);
   /// Most worlds whose sweeps stepSideBySide runs at once.
   static constexpr std::size_t kMaxSideBySide = 4;
   /// w->step(dt) for each of several different worlds with the same iteration counts, with

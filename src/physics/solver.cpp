@@ -17,6 +17,7 @@
 #include <limits>
 #include <span>
 
+#include "physics/kernel_paths.h"
 #include "physics/rows.h"
 
 #if defined(__SSE__)
@@ -264,7 +265,7 @@ void World::step(float h) {
   endStep();
 }
 
-bool World::useVectorSweeps(bool enabled) {
+bool useVectorSweeps(bool enabled) {
   return SurfaceBatches::useVectorSweeps(enabled);
 }
 

@@ -528,7 +528,7 @@ __attribute__((target("avx512f,avx512vl"))) void runAvx512(
     bool useBias) {
   SurfaceSweeps::run(sweeps, bodies, useBias);
 }
-std::atomic<bool> vectorSweeps{true};  // World::useVectorSweeps
+std::atomic<bool> vectorSweeps{true};  // useVectorSweeps (kernel_paths.h)
 }  // namespace
 
 bool SurfaceBatches::canSolveSideBySide() {

@@ -44,7 +44,7 @@ class SurfaceBatches {
   // Whether solveSideBySide overlaps the sweeps here (the CPU has AVX and the vector sweeps
   // are on); otherwise it solves one after the other.
   static bool canSolveSideBySide();
-  // Switches the vector sweeps (World::useVectorSweeps); returns whether they are now on.
+  // Switches the vector sweeps (useVectorSweeps, kernel_paths.h); returns whether they are now on.
   static bool useVectorSweeps(bool enabled);
   // The accumulated impulse of every row, in the order given to build().
   void writeImpulses(float* impulses) const;

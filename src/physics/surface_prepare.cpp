@@ -4,6 +4,7 @@
 #include <cassert>
 #include <vector>
 
+#include "physics/kernel_paths.h"
 #include "physics/rows.h"
 #include "physics/world_impl.h"
 
@@ -186,7 +187,7 @@ std::atomic<bool> wideSurfacePrepare{true};
 #endif
 }
 
-bool World::useWideSurfacePrepare(bool enabled) {
+bool useWideSurfacePrepare(bool enabled) {
 #if defined(__SSE__)
   wideSurfacePrepare.store(enabled);
 #else

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dynahand/physics_world.h"
+#include "physics/kernel_paths.h"
 #include "physics/physics_scenes.h"
 
 #include "physics/alloc_counter.h"
@@ -229,7 +230,7 @@ TEST(Determinism, TwoRunsGiveIdenticalBytes) {
 // bodies and on a weld group, with per-body counts that are and are not multiples of four.
 TEST(Determinism, SurfaceRowsPreparedFourAtATimeGiveTheSameBytes) {
   auto run = [](bool wide, std::vector<std::uint64_t>* hashes, std::vector<float>* impulses) {
-    World::useWideSurfacePrepare(wide);
+    useWideSurfacePrepare(wide);
     scenes::HandLike h = scenes::makeHandLike();
     World& w = h.world;
     w.reserveRows(1000);
@@ -253,7 +254,7 @@ TEST(Determinism, SurfaceRowsPreparedFourAtATimeGiveTheSameBytes) {
   std::vector<std::uint64_t> wideHashes, narrowHashes;
   std::vector<float> wideImpulses, narrowImpulses;
   run(false, &narrowHashes, &narrowImpulses);
-  const bool wide = World::useWideSurfacePrepare(true);
+  const bool wide = useWideSurfacePrepare(true);
   run(true, &wideHashes, &wideImpulses);
   if (!wide) GTEST_SKIP() << "no SSE: only the one-at-a-time path exists";
   ASSERT_EQ(wideHashes.size(), narrowHashes.size());
@@ -301,7 +302,7 @@ TEST(Determinism, WorldsSteppedSideBySideGiveTheSameBytesAsAlone) {
       worlds[static_cast<std::size_t>(k)] = &hands[static_cast<std::size_t>(k)].world;
       worlds[static_cast<std::size_t>(k)]->reserveRows(1000);
     }
-    const bool vector = World::useVectorSweeps(mode != Mode::AloneOneByOne);
+    const bool vector = useVectorSweeps(mode != Mode::AloneOneByOne);
     std::array<Run, kWorlds> out;
     for (int step = 0; step < 45; ++step) {
       for (int k = 0; k < kWorlds; ++k) fill(*worlds[static_cast<std::size_t>(k)], step, k);
@@ -329,11 +330,11 @@ TEST(Determinism, WorldsSteppedSideBySideGiveTheSameBytesAsAlone) {
         r.impulses.insert(r.impulses.end(), w.rows().impulse.begin(), w.rows().impulse.end());
       }
     }
-    World::useVectorSweeps(true);
+    useVectorSweeps(true);
     return std::make_pair(out, vector);
   };
   const auto [alone, vectorAlone] = run(Mode::Alone);
-  EXPECT_EQ(vectorAlone, World::useVectorSweeps(true));
+  EXPECT_EQ(vectorAlone, useVectorSweeps(true));
   for (Mode mode : {Mode::AloneOneByOne, Mode::FourSideBySide, Mode::Pairs, Mode::ThreeAndOne}) {
     const auto [other, vector] = run(mode);
     SCOPED_TRACE(testing::Message() << "mode " << static_cast<int>(mode) << " vector " << vector);

@@ -1,0 +1,13 @@
+// Internal switches between a physics kernel's vector path and its one-by-one path, for the
+// tests that compare the two (both give identical bits). Process-wide; each returns whether its
+// vector path is now in use (never where the CPU lacks the instructions).
+#pragma once
+
+namespace dynahand::physics {
+
+// World::step prepares the surface rows four at a time with SSE (default on).
+bool useWideSurfacePrepare(bool enabled);
+// World::step solves the surface rows eight at a time with AVX (default on).
+bool useVectorSweeps(bool enabled);
+
+}  // namespace dynahand::physics

@@ -19,6 +19,7 @@
 /// once a CloudFrame has seen one frame of the pipeline's size.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -52,13 +53,35 @@ struct DepthStepRule {
   float slope = 3.0f;   ///< extra step per metre of lateral spacing (surfaces up to ~72 deg)
 };
 
+/// Large planes near the hand (a table top, a wall) found on the coarse samples and left out
+/// of the segmentation: a hand resting on a table is otherwise one surface with it.
+struct SupportPlaneConfig {
+  bool enabled = true;  ///< false: no plane is searched
+  /// Samples within this distance (m) of a plane are the plane's. A hand on a table shows the
+  /// camera its back or its side, which lie 1.5 cm or more above the table top.
+  float bandM = 0.01f;
+  /// Planes whose samples cover less than this (m^2, as seen by the camera) are not taken: a
+  /// flat hand with its forearm covers about 0.04 m^2.
+  float minAreaM2 = 0.08f;
+  int hypotheses = 48;  ///< planes tried per search (three samples each)
+  int maxPlanes = 2;    ///< planes left out per frame, largest first (e.g. a table and a wall)
+};
+
+/// A plane n . p = offset in the camera frame (m), n unit and facing the camera.
+struct SupportPlane {
+  Vec3 normal = -Vec3::UnitZ();  ///< n, unit, toward the camera
+  float offset = 0.0f;           ///< m
+  float areaM2 = 0.0f;           ///< its coarse samples' area as seen, m^2
+};
+
 /// Stages 1 and 3: coarse search and segmentation.
 struct SegmentationConfig {
-  DepthStepRule step;         ///< when neighbouring samples belong to one surface
-  float handRadiusM = 0.18f;  ///< region kept within this distance of its nearest point (m)
-  float minAreaM2 = 0.003f;   ///< smaller regions are noise: skip to the next nearest (m^2)
-  int maxSeedAttempts = 16;   ///< nearest-first candidates tried before giving up
-  int coarseStep = 0;         ///< coarse search stride (pixels); 0 = width / 80, >= 1
+  SupportPlaneConfig supportPlanes;  ///< tables and walls left out
+  DepthStepRule step;                ///< when neighbouring samples belong to one surface
+  float handRadiusM = 0.18f;         ///< region kept within this distance of its nearest point (m)
+  float minAreaM2 = 0.003f;          ///< smaller regions are noise: skip to the next nearest (m^2)
+  int maxSeedAttempts = 16;          ///< nearest-first candidates tried before giving up
+  int coarseStep = 0;                ///< coarse search stride (pixels); 0 = width / 80, >= 1
   /// A volume reaching within this many pixels of the image border continues out of
   /// view: usually the body or the other arm cut by the frame (a hand held up to the
   /// camera is seen whole). It is taken only when no volume clear of the border starts
@@ -128,6 +151,9 @@ struct Segment {
   bool limbEndFound = false;
   Vec3 limbEnd = Vec3::Zero();  ///< see limbEndFound; zero when not found, m
   int regionCount = 0;          ///< 1, or 2 with secondRegionDepthBandM
+  /// Planes left out of the segmentation (SupportPlaneConfig), largest first.
+  std::array<SupportPlane, 2> supportPlanes;
+  int supportPlaneCount = 0;  ///< how many of supportPlanes were found, 0-2
 };
 
 /// The per-frame output. Reused across frames (buffers keep their capacity).

@@ -2,11 +2,13 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <span>
 #include <string>
 
 #include "cloud/depth_filter.h"
 #include "cloud/limb_end.h"
 #include "cloud/region_grow.h"
+#include "cloud/support_plane.h"
 #include "dynahand/cloud.h"
 
 namespace dynahand {
@@ -82,15 +84,18 @@ struct CloudPipeline::Impl {
   cloud::RegionGrower coarseGrower;
   cloud::RegionGrower fineGrower;
   cloud::LimbEndFinder limbEnd;
+  cloud::SupportPlaneFinder planeFinder;
   std::vector<float> coarseDepth;        // (coarse height x coarse width), m
   std::vector<std::uint8_t> coarseNear;  // coarse labels dilated by one cell
   std::vector<int> boxColumnCell;        // (box width) coarse column of each box column
   std::vector<int> boxRowCell;           // (box height) coarse row of each box row
   std::vector<Vec2> hullPoints;          // row extremes of the segment, normalised image plane
-  std::vector<float> segmentDepth;       // every other working sample of the box, m (segmentFine)
-  std::vector<float> boxColumnX;         // (box width) x / z of each box column
-  std::vector<VoxelGrid::Key> rowKeys;   // (box width) voxel of each sample of a row
-  std::vector<int> columnVoxel;          // (box width) voxel of the last run over each column
+  // The segmentation samples of the box (every working sample or every other one), m, when
+  // they differ from the working samples: subsampled, or support planes left out (segmentFine).
+  std::vector<float> segmentDepth;
+  std::vector<float> boxColumnX;        // (box width) x / z of each box column
+  std::vector<VoxelGrid::Key> rowKeys;  // (box width) voxel of each sample of a row
+  std::vector<int> columnVoxel;         // (box width) voxel of the last run over each column
   // The fine pass's pieces passed over as too small: the region and its cells (a range of
   // fragmentCells), to join the volume taken when they lie within its ball.
   struct Fragment {
@@ -129,6 +134,9 @@ struct CloudPipeline::Impl {
   // behind it.
   bool mergePieces(CellLabel label, GrownRegion& region);
   void sampleCoarse(const DepthFrame& frame, DepthGrid& grid);
+  // Finds the support planes (tables, walls) on the coarse grid, records them in out.segment
+  // and takes their samples out of the grid; segmentationGrid and scanRow leave them out too.
+  void leaveOutSupportPlanes(DepthGrid& grid, CloudFrame& out);
   // True when the coarse region's cell box reaches within borderMarginPixels of the
   // image border.
   bool atBorder(const DepthGrid& grid, const GrownRegion& r) const {
@@ -158,6 +166,7 @@ struct CloudPipeline::Impl {
     int segmentFactor = 1;  // segmentation samples every segmentFactor working samples
     GrownRegion fineRegion[2];
     bool fineFound[2] = {false, false};
+    bool segmentCopy = false;  // the segmentation samples are in segmentDepth
   };
   // Stage 4's running state over the rows of the box.
   struct Scan {
@@ -166,8 +175,10 @@ struct CloudPipeline::Impl {
     int segmentShift = 0;    // 1: segmentation grid at every other working sample
     int segmentColumns = 0;  // segmentation samples per row
     const float* segmentGrid = nullptr;
-    float handRadius2 = 0.0f;     // m^2
-    float segmentSpacing = 0.0f;  // m per m of depth between segmentation samples
+    std::span<const SupportPlane> planes;  // support planes left out
+    float planeBandM = 0.0f;               // m
+    float handRadius2 = 0.0f;              // m^2
+    float segmentSpacing = 0.0f;           // m per m of depth between segmentation samples
     float invFx = 0.0f, invFy = 0.0f;
     PixelBox segmentBox;
     int maskPixels = 0;
@@ -188,7 +199,7 @@ struct CloudPipeline::Impl {
   // 3. Filtering and full-resolution growing on the box, widened while a region reaches a box
   //    edge that is not an image edge.
   void segmentFine(const DepthFrame& frame, Search& s, CloudFrame& out);
-  DepthGrid segmentationGrid(const Search& s, const CloudFrame& out);
+  DepthGrid segmentationGrid(Search& s, const CloudFrame& out);
   void growFineRegions(Search& s, const DepthGrid& fine);
   bool widenBox(Search& s, int columns, int rows) const;
   // 4. Mask, voxel grid and hull points in one scan (row-major: deterministic).
@@ -255,7 +266,8 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
   impl_->boxColumnCell.reserve(static_cast<std::size_t>(intrinsics.width));
   impl_->boxRowCell.reserve(static_cast<std::size_t>(intrinsics.height));
   impl_->hullPoints.reserve(2 * static_cast<std::size_t>(intrinsics.height));
-  impl_->segmentDepth.reserve(pixels / 4 + static_cast<std::size_t>(intrinsics.width));
+  impl_->segmentDepth.reserve(pixels);
+  impl_->planeFinder.reserve(coarseCells);
   impl_->boxColumnX.reserve(static_cast<std::size_t>(intrinsics.width));
   impl_->rowKeys.reserve(static_cast<std::size_t>(intrinsics.width));
   impl_->columnVoxel.reserve(static_cast<std::size_t>(intrinsics.width));
@@ -381,6 +393,17 @@ void CloudPipeline::Impl::sampleCoarse(const DepthFrame& frame, DepthGrid& grid)
     }
   }
   grid.depth = coarseDepth.data();
+}
+
+void CloudPipeline::Impl::leaveOutSupportPlanes(DepthGrid& grid, CloudFrame& out) {
+  const SupportPlaneConfig& c = config.segmentation.supportPlanes;
+  Segment& segment = out.segment;
+  segment.supportPlaneCount = planeFinder.find(grid, k, c, segment.supportPlanes);
+  for (int p = 0; p < segment.supportPlaneCount; ++p) {
+    cloud::removePlaneSamples(segment.supportPlanes[static_cast<std::size_t>(p)], c.bandM, k,
+                              grid.originU, grid.originV, grid.step, grid.width, grid.height,
+                              coarseDepth.data());
+  }
 }
 
 void CloudPipeline::Impl::prepareOutput(const DepthFrame& frame, CloudFrame& out) {
@@ -519,14 +542,18 @@ void CloudPipeline::Impl::markCoarseNeighbourhood(const Search& s) {
   }
 }
 
-DepthGrid CloudPipeline::Impl::segmentationGrid(const Search& s, const CloudFrame& out) {
+DepthGrid CloudPipeline::Impl::segmentationGrid(Search& s, const CloudFrame& out) {
   const PixelBox& box = s.box;
   const int segmentStride = s.stride * s.segmentFactor;
   // The segmentation grid: the working samples, or every other one of them.
   const int bw = cloud::samplesAlong(box.width(), segmentStride);
   const int bh = cloud::samplesAlong(box.height(), segmentStride);
   const float* grid = out.filteredDepthM.data();
-  if (s.segmentFactor > 1) {
+  s.segmentCopy = s.segmentFactor > 1 || out.segment.supportPlaneCount > 0;
+  if (s.segmentFactor == 1 && s.segmentCopy) {
+    segmentDepth.assign(out.filteredDepthM.begin(), out.filteredDepthM.end());
+    grid = segmentDepth.data();
+  } else if (s.segmentFactor > 1) {
     const int workingColumns = cloud::samplesAlong(box.width(), s.stride);
     segmentDepth.resize(static_cast<std::size_t>(bw) * bh);
     for (int v = 0; v < bh; ++v) {
@@ -536,6 +563,11 @@ DepthGrid CloudPipeline::Impl::segmentationGrid(const Search& s, const CloudFram
       for (int u = 0; u < bw; ++u) dst[u] = src[u * s.segmentFactor];
     }
     grid = segmentDepth.data();
+  }
+  for (int p = 0; p < out.segment.supportPlaneCount; ++p) {
+    cloud::removePlaneSamples(out.segment.supportPlanes[static_cast<std::size_t>(p)],
+                              config.segmentation.supportPlanes.bandM, k, box.x0, box.y0,
+                              segmentStride, bw, bh, segmentDepth.data());
   }
   // Coarse cell column / row of each box column / row.
   const int step = s.coarse.step;
@@ -720,6 +752,8 @@ void CloudPipeline::Impl::scanRow(const Search& s, int v, Scan& scan, CloudFrame
       segmented = z > 0.0f &&
                   std::fabs(z - zs) <= cloud::maxDepthStep(seg.step, zs, scan.segmentSpacing) &&
                   (p - s.fineRegion[label - 1].nearestPoint).squaredNorm() <= scan.handRadius2;
+      for (const SupportPlane& plane : scan.planes)
+        segmented = segmented && !cloud::onPlane(plane, p, scan.planeBandM);
     }
     if (!segmented) {
       if (spanBegin >= 0) closeSpan(u);
@@ -784,7 +818,10 @@ CloudPipeline::Impl::Scan CloudPipeline::Impl::scanSegmented(const Search& s, Cl
   // segmentation neighbours): silhouette edges stay at the working resolution.
   scan.segmentShift = s.segmentFactor == 2 ? 1 : 0;
   scan.segmentColumns = cloud::samplesAlong(s.box.width(), stride * s.segmentFactor);
-  scan.segmentGrid = s.segmentFactor == 2 ? segmentDepth.data() : out.filteredDepthM.data();
+  scan.segmentGrid = s.segmentCopy ? segmentDepth.data() : out.filteredDepthM.data();
+  scan.planes = std::span(out.segment.supportPlanes.data(),
+                          static_cast<std::size_t>(out.segment.supportPlaneCount));
+  scan.planeBandM = seg.supportPlanes.bandM;
   scan.handRadius2 = seg.handRadiusM * seg.handRadiusM;
   scan.segmentSpacing = static_cast<float>(stride * s.segmentFactor) / std::min(k.fx, k.fy);
   for (int v = 0; v < bh; ++v) scanRow(s, v, scan, out);
@@ -844,6 +881,7 @@ Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {
   prepareOutput(frame, out);
   Search s;
   sampleCoarse(frame, s.coarse);
+  leaveOutSupportPlanes(s.coarse, out);
   coarseGrower.reset(s.coarse, k);
   // A coarse volume can fail at full resolution (e.g. a speckle cluster whose coarse area was
   // overestimated): it is retired and the search goes on with the next candidate.

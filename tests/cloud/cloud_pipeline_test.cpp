@@ -35,7 +35,9 @@ TEST(CloudPipeline, PlaneAtHalfMetreDeprojectsToHalfMetreEverywhere) {
   const Intrinsics k = cloud::scenes::camera(320, 240);
   DepthFrame frame(320, 240, 0.001f);
   std::fill(frame.depth.begin(), frame.depth.end(), std::uint16_t{500});
-  CloudPipeline pipeline(k);
+  CloudConfig config;
+  config.segmentation.supportPlanes.enabled = false;  // the plane stands for the hand here
+  CloudPipeline pipeline(k, config);
   CloudFrame out;
   ASSERT_TRUE(pipeline.process(frame, out).ok());
   ASSERT_TRUE(out.segment.found);
@@ -196,11 +198,42 @@ TEST(CloudPipeline, RangeGateIgnoresObjectsTooClose) {
   const std::vector<Sphere> tooClose = disc(Vec3(0.0f, 0.0f, 0.1f), 0.02f);
   spheres.insert(spheres.end(), tooClose.begin(), tooClose.end());
   const DepthFrame frame = cloud::scenes::render(k, spheres, 1.0f);
-  CloudPipeline pipeline(k);  // minDepthM 0.15
+  // The object too close hides the disc: what is left is the wall, which stands for the hand.
+  CloudConfig config;  // minDepthM 0.15
+  config.segmentation.supportPlanes.enabled = false;
+  CloudPipeline pipeline(k, config);
   CloudFrame out;
   ASSERT_TRUE(pipeline.process(frame, out).ok());
   ASSERT_TRUE(out.segment.found);
   for (const Vec3& p : out.points) EXPECT_GT(p.z(), 0.5f);
+}
+
+TEST(CloudPipeline, AWallIsASupportPlaneAndLeftOut) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  // A hand-sized disc 4 cm in front of a wall: without support planes the wall's samples near
+  // the disc would be one surface with it.
+  const DepthFrame frame = cloud::scenes::render(k, disc(Vec3(0.0f, 0.0f, 0.5f), 0.06f), 0.54f);
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  ASSERT_EQ(out.segment.supportPlaneCount, 1);
+  const SupportPlane& wall = out.segment.supportPlanes[0];
+  EXPECT_NEAR(wall.normal.z(), -1.0f, 1e-3f);  // facing the camera
+  EXPECT_NEAR(wall.offset, -0.54f, 2e-3f);
+  EXPECT_GT(wall.areaM2, pipeline.config().segmentation.supportPlanes.minAreaM2);
+  for (const Vec3& p : out.points) EXPECT_LT(p.z(), 0.54f - 0.01f);
+}
+
+TEST(CloudPipeline, AHandSizedSurfaceIsNoSupportPlane) {
+  const Intrinsics k = cloud::scenes::camera(320, 240);
+  const DepthFrame frame = cloud::scenes::render(k, disc(Vec3(0.0f, 0.0f, 0.5f), 0.06f), 0.0f);
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  ASSERT_TRUE(pipeline.process(frame, out).ok());
+  ASSERT_TRUE(out.segment.found);
+  EXPECT_EQ(out.segment.supportPlaneCount, 0);
+  EXPECT_GT(out.pointCount(), 100u);
 }
 
 TEST(CloudPipeline, ForearmIsCutAtTheHandRadiusAndItsSideHasNoPlane) {
@@ -496,7 +529,8 @@ TEST(CloudFilter, FlyingPixelsAtDepthEdgesAreRemoved) {
   const Intrinsics k = cloud::scenes::camera(160, 120);
   CloudConfig config;
   config.filter.median = false;
-  config.segmentation.handRadiusM = 1.0f;  // filter box covers the edge
+  config.segmentation.handRadiusM = 1.0f;             // filter box covers the edge
+  config.segmentation.supportPlanes.enabled = false;  // the two planes stand for a hand
   CloudPipeline pipeline(k, config);
   CloudFrame out;
   ASSERT_TRUE(pipeline.process(stepEdgeFrame(), out).ok());
@@ -512,6 +546,7 @@ TEST(CloudFilter, MedianFillsOnePixelHoles) {
   const Intrinsics k = cloud::scenes::camera(160, 120);
   CloudConfig config;  // median on by default
   config.segmentation.handRadiusM = 1.0f;
+  config.segmentation.supportPlanes.enabled = false;  // the two planes stand for a hand
   CloudPipeline pipeline(k, config);
   CloudFrame out;
   ASSERT_TRUE(pipeline.process(stepEdgeFrame(), out).ok());
@@ -525,6 +560,7 @@ TEST(CloudFilter, BilateralKeepsPlanesAndInventsNoDepth) {
   config.filter.median = false;
   config.filter.bilateral = true;
   config.segmentation.handRadiusM = 1.0f;
+  config.segmentation.supportPlanes.enabled = false;  // the two planes stand for a hand
   CloudPipeline pipeline(k, config);
   CloudFrame out;
   ASSERT_TRUE(pipeline.process(stepEdgeFrame(), out).ok());

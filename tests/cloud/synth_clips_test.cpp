@@ -236,5 +236,76 @@ TEST(CloudSynthClips, StructuredLightHeadMountedFindsTheHandAtTheArmsFarEnd) {
   }
 }
 
+// Over frames 0, every, 2 every, ... of a sequence: the share of frames whose segment holds
+// the palm, and the share of the segmented pixels (with depth) that show something other than
+// the hand and its forearm.
+struct SceneShares {
+  double palmSegmented = 0.0;
+  double offHand = 0.0;
+};
+
+SceneShares checkScene(synth::SyntheticSequence& seq, int every, bool supportPlanes) {
+  CloudConfig config;
+  config.segmentation.sensorMinRangeM = seq.profile().minRange;
+  config.segmentation.supportPlanes.enabled = supportPlanes;
+  CloudPipeline pipeline(seq.intrinsics(), config);
+  CloudFrame out;
+  constexpr float kReachM = 0.03f;  // as checkHeadView
+  long segmented = 0, offHand = 0;
+  int frames = 0, palms = 0;
+  for (int i = 0; i < seq.frameCount(); i += every, ++frames) {
+    const synth::SyntheticFrame& frame = seq.frame(i);
+    EXPECT_TRUE(pipeline.process(frame.depth, out).ok());
+    const std::span<const synth::PixelLabel> labels = seq.labels();
+    const Keypoints21& kp = frame.hands[0].keypoints;
+    const Vec3 palm = (kp[0] + kp[5] + kp[9] + kp[13] + kp[17]) / 5.0f;
+    bool reached = false;
+    for (const Vec3& p : out.points) reached = reached || (p - palm).norm() < kReachM;
+    palms += out.segment.found && reached;
+    for (std::size_t p = 0; p < labels.size(); ++p) {
+      if (out.mask[p] == 0 || frame.depth.depth[p] == 0) continue;
+      ++segmented;
+      offHand += labels[p] != synth::PixelLabel::Hand0;
+    }
+  }
+  SceneShares shares;
+  if (frames > 0) shares.palmSegmented = static_cast<double>(palms) / frames;
+  if (segmented > 0) shares.offHand = static_cast<double>(offHand) / static_cast<double>(segmented);
+  return shares;
+}
+
+// A hand reaching to a table 4 or 8 cm below its wrist, seen from the desk and from the head:
+// the table is one surface with the hand where they meet, and without the support planes a
+// third to three quarters of the segment is table (the forearm's ball grows over it). With
+// them the table is left out and the palm stays in the segment.
+TEST(CloudSynthClips, ATableUnderTheHandStaysOutOfTheSegment) {
+  for (const auto placement :
+       {synth::CameraPlacement::DeskFacing, synth::CameraPlacement::HeadMounted}) {
+    for (const char* clip : {"wave", "open-close", "count", "reach-grasp-lift", "grasp-cylinder"}) {
+      for (const float drop : {0.08f, 0.04f}) {
+        SCOPED_TRACE(std::string(clip) +
+                     (placement == synth::CameraPlacement::DeskFacing ? " desk" : " head-mounted") +
+                     " table " + std::to_string(drop) + " m below the wrist");
+        synth::SynthOptions options;
+        options.clip = clip;
+        options.profile = "tof";
+        options.frameCount = 90;
+        options.scene.placement = placement;
+        options.scene.table = true;
+        options.scene.tableDrop = drop;
+        Result<synth::SyntheticSequence> seq = synth::SyntheticSequence::create(options);
+        ASSERT_TRUE(seq.ok()) << seq.error().message;
+        const SceneShares with = checkScene(*seq, 3, true);
+        EXPECT_GE(with.palmSegmented, 0.95);
+        EXPECT_LE(with.offHand, 0.05);
+        if (drop < 0.05f) {
+          const SceneShares without = checkScene(*seq, 3, false);
+          EXPECT_GE(without.offHand, 0.3) << "the table should flood the segment without planes";
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace dynahand

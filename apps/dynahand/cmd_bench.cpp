@@ -74,7 +74,10 @@ constexpr const char* kMotionIntro =
     "rows (`tof`, `gt` start) put an object against the palm (docs/synth.md, `--object`): "
     "`grasp-cylinder` and `reach-grasp-lift` at 2.5x with a ball, a cylinder and a box each, and "
     "every animbank segment with one of the three in turn; their errors count only the joints "
-    "the object does not hide (whose pixel does not show the object). Times are the "
+    "the object does not hide (whose pixel does not show the object). The table rows (`tof`, "
+    "`gt` start) play every animbank segment above a table 8 cm below the rest wrist position "
+    "(`dynahand synth --table --table-drop 0.08`). "
+    "Times are the "
     "tracker's wall time per frame on one thread (synthesis not included).";
 
 constexpr const char* kStandardIntro =

@@ -85,11 +85,12 @@ struct CloudPipeline::Impl {
   cloud::RegionGrower fineGrower;
   cloud::LimbEndFinder limbEnd;
   cloud::SupportPlaneFinder planeFinder;
-  std::vector<float> coarseDepth;        // (coarse height x coarse width), m
-  std::vector<std::uint8_t> coarseNear;  // coarse labels dilated by one cell
-  std::vector<int> boxColumnCell;        // (box width) coarse column of each box column
-  std::vector<int> boxRowCell;           // (box height) coarse row of each box row
-  std::vector<Vec2> hullPoints;          // row extremes of the segment, normalised image plane
+  std::vector<float> coarseDepth;           // (coarse height x coarse width), m
+  std::vector<std::uint8_t> coarseOnPlane;  // (coarse cells) 1: a support plane's sample
+  std::vector<std::uint8_t> coarseNear;     // coarse labels dilated by one cell
+  std::vector<int> boxColumnCell;           // (box width) coarse column of each box column
+  std::vector<int> boxRowCell;              // (box height) coarse row of each box row
+  std::vector<Vec2> hullPoints;             // row extremes of the segment, normalised image plane
   // The segmentation samples of the box (every working sample or every other one), m, when
   // they differ from the working samples: subsampled, or support planes left out (segmentFine).
   std::vector<float> segmentDepth;
@@ -224,15 +225,17 @@ bool CloudPipeline::Impl::findLimbEnd(const DepthGrid& grid, int seed, const Gro
   // near the camera (nearCutMax).
   const float nearCutMax = std::max(kNearCutMaxDepthM, seg.sensorMinRangeM + kNearCutAboveRangeM);
   const float nearCut = std::min(r.nearestPoint.z() + kNearCutDepthM, nearCutMax);
-  int cell = limbEnd.find(grid, k, seed, seg.step, limbRadius, seg.borderMarginPixels, nearCut);
+  const std::uint8_t* planeCells = coarseOnPlane.empty() ? nullptr : coarseOnPlane.data();
+  int cell = limbEnd.find(grid, k, seed, seg.step, limbRadius, seg.borderMarginPixels, nearCut,
+                          planeCells);
   if (cell < 0) return false;
   end = grid.point(k, cell % grid.width, cell / grid.width);
   // A forearm seen along its length (a head-mounted camera, the elbow nearest) may be longer
   // than the ball: the hand then leaves the ball too and the end found lies between it and the
   // border. Explored again from that end, the ball holds the hand and the fingers end free.
   for (int round = 0; round < kLimbEndRounds; ++round) {
-    const int next =
-        limbEnd.find(grid, k, cell, seg.step, limbRadius, seg.borderMarginPixels, nearCut);
+    const int next = limbEnd.find(grid, k, cell, seg.step, limbRadius, seg.borderMarginPixels,
+                                  nearCut, planeCells);
     if (next < 0) break;
     const Vec3 nextEnd = grid.point(k, next % grid.width, next / grid.width);
     const bool moved = (nextEnd - end).norm() > kLimbEndMoveFactor * seg.handRadiusM;
@@ -262,6 +265,7 @@ CloudPipeline::CloudPipeline(const Intrinsics& intrinsics, const CloudConfig& co
   impl_->limbEnd.reserve(coarseCells, intrinsics.width, intrinsics.height);
   impl_->fineGrower.reserve(pixels, intrinsics.width, intrinsics.height);
   impl_->coarseDepth.reserve(coarseCells);
+  impl_->coarseOnPlane.reserve(coarseCells);
   impl_->coarseNear.reserve(coarseCells);
   impl_->boxColumnCell.reserve(static_cast<std::size_t>(intrinsics.width));
   impl_->boxRowCell.reserve(static_cast<std::size_t>(intrinsics.height));
@@ -399,10 +403,11 @@ void CloudPipeline::Impl::leaveOutSupportPlanes(DepthGrid& grid, CloudFrame& out
   const SupportPlaneConfig& c = config.segmentation.supportPlanes;
   Segment& segment = out.segment;
   segment.supportPlaneCount = planeFinder.find(grid, k, c, segment.supportPlanes);
+  coarseOnPlane.assign(coarseDepth.size(), 0);
   for (int p = 0; p < segment.supportPlaneCount; ++p) {
     cloud::removePlaneSamples(segment.supportPlanes[static_cast<std::size_t>(p)], c.bandM, k,
                               grid.originU, grid.originV, grid.step, grid.width, grid.height,
-                              coarseDepth.data());
+                              coarseDepth.data(), coarseOnPlane.data());
   }
 }
 

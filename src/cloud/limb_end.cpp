@@ -24,11 +24,12 @@ void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
   state_.reserve(cells);
   cells_.reserve(cells);
   queue_.reserve(cells);
+  planeContacts_.reserve(cells);
 }
 
 int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
                         const DepthStepRule& rule, float limbRadiusM, int borderMarginPixels,
-                        float nearCutDepthM) {
+                        float nearCutDepthM, const std::uint8_t* planeCells) {
   const int w = grid.width;
   const int h = grid.height;
   const auto cellCount = static_cast<std::size_t>(w) * h;
@@ -36,6 +37,7 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
   steps_.assign(cellCount, -1);
   cells_.clear();
   queue_.clear();
+  planeContacts_.clear();
   const float* depth = grid.depth;
   const auto step = static_cast<float>(grid.step);
   const float spacingX = step / k.fx;
@@ -84,10 +86,12 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
     const int c = j * w + i;
     const float z = depth[c];
     bool leaves = atBorder(i, j);
+    bool touchesPlane = false;
     // n = c + d; back = c - d; beyond = c + 2d (-1 where outside the grid).
     const auto visit = [&](int n, int ni, int nj, float spacing, int back, int beyond) {
       const auto un = static_cast<std::size_t>(n);
       if (depth[n] == 0.0f) {
+        touchesPlane = touchesPlane || (planeCells != nullptr && planeCells[n] != 0);
         if (z < nearCutDepthM && back >= 0 && beyond >= 0 && depth[beyond] == 0.0f &&
             depth[back] > 0.0f && depth[back] - z > kNearCutSlope * spacing * z)
           leaves = true;  // the limb comes nearer than the sensor's range
@@ -109,6 +113,18 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
       state_[static_cast<std::size_t>(c)] = kAttachment;
       steps_[static_cast<std::size_t>(c)] = 0;
       queue_.push_back(cells_[q]);
+      attached = true;
+    } else if (touchesPlane) {
+      planeContacts_.push_back(cells_[q]);
+    }
+  }
+  if (!attached) {
+    // Attached nowhere else: where it meets a support plane.
+    for (const std::int32_t packed : planeContacts_) {
+      const auto c = static_cast<std::size_t>((packed >> 16) * w + (packed & 0xffff));
+      state_[c] = kAttachment;
+      steps_[c] = 0;
+      queue_.push_back(packed);
       attached = true;
     }
   }

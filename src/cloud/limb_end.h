@@ -26,18 +26,22 @@ class LimbEndFinder {
   // nearCutDepthM (m) where the surface, coming nearer, runs into missing data (cut off by the
   // sensor's near range). Returns the cell of the surface farthest from every attachment, measured
   // along the surface, or -1 when the surface has no attachment (a hand on its own: its nearest
-  // point is fine).
+  // point is fine). planeCells (optional, per grid cell, nonzero: a sample of a support plane
+  // taken out of the grid): a surface with no other attachment is attached where it meets such
+  // cells (a forearm rising from a table, which hides the rest of the arm).
   int find(const DepthGrid& grid, const Intrinsics& k, int seed, const DepthStepRule& rule,
-           float limbRadiusM, int borderMarginPixels, float nearCutDepthM);
+           float limbRadiusM, int borderMarginPixels, float nearCutDepthM,
+           const std::uint8_t* planeCells = nullptr);
 
  private:
   std::vector<int> steps_;           // (cells) steps along the surface from an attachment, -1
   std::vector<std::uint8_t> state_;  // (cells) 0 = unseen, 1 = on the surface, 2 = attachment
   // Packed cells (j << 16 | i):
-  std::vector<std::int32_t> cells_;  // the surface's cells in discovery order
-  std::vector<std::int32_t> queue_;  // breadth-first order from the attachments
-  std::vector<float> columnX_;       // (width) (u - cx) / fx of each column
-  std::vector<float> rowY_;          // (height) (v - cy) / fy of each row
+  std::vector<std::int32_t> cells_;          // the surface's cells in discovery order
+  std::vector<std::int32_t> queue_;          // breadth-first order from the attachments
+  std::vector<std::int32_t> planeContacts_;  // surface cells next to a support plane's cells
+  std::vector<float> columnX_;               // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;                  // (height) (v - cy) / fy of each row
 };
 
 }  // namespace dynahand::cloud

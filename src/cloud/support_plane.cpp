@@ -173,7 +173,8 @@ int SupportPlaneFinder::find(const DepthGrid& grid, const Intrinsics& k,
 }
 
 void removePlaneSamples(const SupportPlane& plane, float bandM, const Intrinsics& k, int originU,
-                        int originV, int step, int width, int height, float* depth) {
+                        int originV, int step, int width, int height, float* depth,
+                        std::uint8_t* removed) {
   const float invFx = 1.0f / k.fx, invFy = 1.0f / k.fy;
   for (int j = 0; j < height; ++j) {
     const float y = (static_cast<float>(originV + j * step) - k.cy) * invFy;
@@ -182,7 +183,9 @@ void removePlaneSamples(const SupportPlane& plane, float bandM, const Intrinsics
       const float z = row[i];
       if (z <= 0.0f) continue;
       const float x = (static_cast<float>(originU + i * step) - k.cx) * invFx;
-      if (onPlane(plane, Vec3(x * z, y * z, z), bandM)) row[i] = 0.0f;
+      if (!onPlane(plane, Vec3(x * z, y * z, z), bandM)) continue;
+      row[i] = 0.0f;
+      if (removed != nullptr) removed[static_cast<std::size_t>(j) * width + i] = 1;
     }
   }
 }

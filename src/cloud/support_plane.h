@@ -55,8 +55,10 @@ inline bool onPlane(const SupportPlane& plane, const Vec3& p, float bandM) {
 }
 
 // Zeroes the grid samples (depth, m; 0 = none) of `depth` that lie on the plane: cell (i, j)
-// is pixel (originU + i step, originV + j step).
+// is pixel (originU + i step, originV + j step). removed (optional, per cell): set to 1 where
+// a sample was zeroed.
 void removePlaneSamples(const SupportPlane& plane, float bandM, const Intrinsics& k, int originU,
-                        int originV, int step, int width, int height, float* depth);
+                        int originV, int step, int width, int height, float* depth,
+                        std::uint8_t* removed = nullptr);
 
 }  // namespace dynahand::cloud

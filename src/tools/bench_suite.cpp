@@ -30,6 +30,9 @@ constexpr int kMotionFrames = 90;
 constexpr float kMotionSpeed = 2.5f;
 constexpr float kMotionProportionSpread = 0.15f;
 // The objects of the held-object rows.
+// The table rows' table: this far (m) below the wrist, which the fingers of a hand that
+// reaches down touch.
+constexpr float kTableDropM = 0.08f;
 constexpr synth::HeldObject kHeldObjects[] = {synth::HeldObject::Ball, synth::HeldObject::Cylinder,
                                               synth::HeldObject::Box};
 
@@ -340,6 +343,17 @@ void addAnimbankItems(const MotionPlan& plan, const Animbank& animbank, MotionSu
       suite.items.push_back(std::move(item));
     }
   }
+  // A table close under the hand: every segment (tof, gt start).
+  for (synth::CameraPlacement placement : plan.placements) {
+    for (int g = 0; g < segmentsUsed; ++g) {
+      SuiteItem item = segmentItem(
+          plan, animbank, g,
+          fmt::format("table: animbank segments / tof / {} / gt", placementName(placement)), "tof",
+          placement, false, 3200 + static_cast<std::uint64_t>(g));
+      item.tableDropM = kTableDropM;
+      suite.items.push_back(std::move(item));
+    }
+  }
   const int poseCount = static_cast<int>(animbank.poses->size());
   for (synth::CameraPlacement placement : plan.placements) {
     SuiteItem item = motionItem(
@@ -390,6 +404,8 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   so.speed = item.speed;
   so.hand = item.size.dimensions;
   so.scene.heldObject = item.heldObject;
+  so.scene.table = item.tableDropM > 0.0f;
+  if (so.scene.table) so.scene.tableDrop = item.tableDropM;
   auto seq = synth::SyntheticSequence::create(so);
   if (!seq) return Error{seq.message()};
   track::TrackerSettings settings = item.tracker;

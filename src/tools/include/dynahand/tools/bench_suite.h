@@ -70,6 +70,9 @@ struct SuiteItem {
   /// An object held against the palm (synth::Scene::heldObject); joints it hides from the
   /// camera (their pixel shows the object) are not scored.
   synth::HeldObject heldObject = synth::HeldObject::None;
+  /// A table this far (m) below the scene's rest wrist position (synth::Scene::tableDrop);
+  /// 0: none.
+  float tableDropM = 0.0f;
 };
 
 /// What standardSuite builds.

@@ -76,7 +76,8 @@ constexpr const char* kMotionIntro =
     "every animbank segment with one of the three in turn; their errors count only the joints "
     "the object does not hide (whose pixel does not show the object). The table rows (`tof`, "
     "`gt` start) play every animbank segment above a table 8 cm below the rest wrist position "
-    "(`dynahand synth --table --table-drop 0.08`). "
+    "(`dynahand synth --table --table-drop 0.08`); the captured motion passes through the table "
+    "at times, and the joints it hides then (a table pixel in front of them) are not scored. "
     "Times are the "
     "tracker's wall time per frame on one thread (synthesis not included).";
 

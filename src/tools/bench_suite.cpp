@@ -36,10 +36,15 @@ constexpr float kTableDropM = 0.08f;
 constexpr synth::HeldObject kHeldObjects[] = {synth::HeldObject::Ball, synth::HeldObject::Cylinder,
                                               synth::HeldObject::Box};
 
-// The joints of the last frame rendered whose pixel does not show the held object (the
-// object is not in front of them).
-std::array<bool, 21> notHiddenByTheObject(const synth::SyntheticSequence& seq,
-                                          const Keypoints21& keypoints) {
+// A joint this far (m) or more behind the table or wall its pixel shows is hidden by it.
+constexpr float kHiddenBehindSceneM = 0.01f;
+
+// The joints of the last frame rendered that the scene does not hide: whose pixel shows
+// neither the held object nor the background (a table, a wall) in front of them. A synthetic
+// hand moved by captured motion can pass through a table; what it hides there is not scored.
+std::array<bool, 21> notHiddenByTheScene(const synth::SyntheticSequence& seq,
+                                         const synth::SyntheticFrame& frame,
+                                         const Keypoints21& keypoints) {
   const Intrinsics& k = seq.intrinsics();
   std::array<bool, 21> scored;
   scored.fill(true);
@@ -50,7 +55,11 @@ std::array<bool, 21> notHiddenByTheObject(const synth::SyntheticSequence& seq,
     const auto v = static_cast<int>(std::lround(uv.y()));
     if (u < 0 || v < 0 || u >= k.width || v >= k.height) continue;
     const std::size_t pixel = static_cast<std::size_t>(v) * k.width + u;
-    scored[j] = seq.labels()[pixel] != synth::PixelLabel::HeldObject;
+    const synth::PixelLabel label = seq.labels()[pixel];
+    const float z = frame.depth.metres(u, v);
+    scored[j] = label != synth::PixelLabel::HeldObject &&
+                !(label == synth::PixelLabel::Background && z > 0.0f &&
+                  z < keypoints[j].z() - kHiddenBehindSceneM);
   }
   return scored;
 }
@@ -427,8 +436,8 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
     result.keypoints.groundTruth.push_back(frame.hands[0].keypoints);
     result.keypoints.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
                                                    : std::nullopt);
-    if (item.heldObject != synth::HeldObject::None)
-      result.keypoints.scored.push_back(notHiddenByTheObject(*seq, frame.hands[0].keypoints));
+    if (item.heldObject != synth::HeldObject::None || item.tableDropM > 0.0f)
+      result.keypoints.scored.push_back(notHiddenByTheScene(*seq, frame, frame.hands[0].keypoints));
   }
   auto metrics = computeKeypointMetrics(result.keypoints);
   if (!metrics) return Error{metrics.message()};

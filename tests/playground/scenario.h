@@ -23,12 +23,33 @@ struct ScenarioStats {
   float meanKeypointErrorM = 0.0f;  // tracker vs ground truth, mean over frames and keypoints
 };
 
-inline ScenarioStats runScenario(Playground& pg, const std::string& clip, int frames,
-                                 const std::function<void(int, const Playground&)>& onFrame) {
+// The scene camera that maps the clip seen by the head-mounted camera onto the same scene poses
+// as `deskCamera` maps it seen by the desk camera: the synthesiser places the same motion at
+// each placement's rest pose, so the two views differ by one rigid transform (the root body's
+// pose at frame 0 in each).
+inline Pose headMountedCamera(const Pose& deskCamera, const std::string& clip) {
+  synth::SynthOptions o;
+  o.clip = clip;
+  o.frameCount = 1;
+  auto desk = synth::SyntheticSequence::create(o);
+  o.scene.placement = synth::CameraPlacement::HeadMounted;
+  auto head = synth::SyntheticSequence::create(o);
+  EXPECT_TRUE(desk.ok() && head.ok());
+  if (!desk || !head) return deskCamera;
+  const Pose rootDesk = desk->truth(0, 0).pose.bodies.front();
+  const Pose rootHead = head->truth(0, 0).pose.bodies.front();
+  return deskCamera * rootDesk * rootHead.inverse();
+}
+
+inline ScenarioStats runScenario(
+    Playground& pg, const std::string& clip, int frames,
+    const std::function<void(int, const Playground&)>& onFrame,
+    synth::CameraPlacement placement = synth::CameraPlacement::DeskFacing) {
   synth::SynthOptions o;
   o.clip = clip;
   o.profile = "tof";
   o.frameCount = frames;
+  o.scene.placement = placement;
   auto seq = synth::SyntheticSequence::create(o);
   EXPECT_TRUE(seq.ok()) << (seq.ok() ? "" : seq.message());
   ScenarioStats stats;

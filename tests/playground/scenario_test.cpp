@@ -1,4 +1,4 @@
-// Playground scenarios with the tracker in the loop (issue #9): synthetic tof frames of a
+// Playground scenarios with the tracker in the loop: synthetic tof frames of a
 // clip seen by the desk-facing camera -> tracker (ground-truth first frame) -> powered
 // ragdoll hand in a scene. Thresholds are the issue's.
 #include <gtest/gtest.h>
@@ -16,10 +16,13 @@ namespace {
 constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
 constexpr float kFps = 30.0f;
 
-std::unique_ptr<Playground> build(const std::string& sceneName) {
+// headClip: the scene camera is remapped for this clip seen by the head-mounted camera
+// (test::headMountedCamera); empty: the scene's own (desk) mapping.
+std::unique_ptr<Playground> build(const std::string& sceneName, const std::string& headClip = "") {
   auto scene = loadScene(test::sceneFile(sceneName));
   EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.message());
   if (!scene) return nullptr;
+  if (!headClip.empty()) scene->camera = test::headMountedCamera(scene->camera, headClip);
   auto pg = Playground::create(*scene, model::makeDefaultHand());
   EXPECT_TRUE(pg.ok()) << (pg.ok() ? "" : pg.message());
   return pg.ok() ? std::move(*pg) : nullptr;
@@ -104,6 +107,21 @@ TEST(Scenario, BarbellPickedUpByTheBarDoesNotSlipSideways) {
   EXPECT_GE(highest, 0.10f);
   EXPECT_GE(held.longest, static_cast<int>(2.0f * kFps));
   EXPECT_LT(maxAlong - minAlong, 0.02f) << "the bar slides less than 2 cm in the hand";
+}
+
+// The lever scenario with the clip seen by the head-mounted camera (back of the hand toward it),
+// the scene's camera remapped so that the same motion lands on the same scene poses.
+TEST(Scenario, LeverPushedFromOneEndStopToTheOtherSeenFromTheHead) {
+  auto pg = build("lever", "push-forward");
+  ASSERT_NE(pg, nullptr);
+  const float start = *pg->hingeAngle("switch");
+  const auto stats = test::runScenario(
+      *pg, "push-forward", 72, [](int, const Playground&) {}, synth::CameraPlacement::HeadMounted);
+  expectTrackedMostly(stats);
+  const float end = *pg->hingeAngle("switch");
+  std::printf("head-mounted: lever from %.1f to %.1f degrees\n", degrees(start), degrees(end));
+  EXPECT_NEAR(start, 35.0f * kDeg, 1.0f * kDeg);
+  EXPECT_NEAR(end, -35.0f * kDeg, 2.0f * kDeg);
 }
 
 TEST(Scenario, LeverPushedFromOneEndStopToTheOther) {

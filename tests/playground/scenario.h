@@ -1,6 +1,6 @@
-// Scenario runner for the playground tests: a synthetic clip seen by the desk-facing
-// synthetic tof sensor, tracked by the tracker (initialised from the first frame's ground
-// truth), drives the playground; `onFrame` sees the playground after every input frame.
+// Scenario runner for the playground tests: a synthetic clip seen by the desk-facing (or the
+// head-mounted) synthetic tof sensor, tracked by the tracker (initialised from the first frame's
+// ground truth), drives the playground; `onFrame` sees the playground after every input frame.
 // Set DYNAHAND_PLAYGROUND_TRUTH=1 to drive it by the ground truth instead (tuning only).
 #pragma once
 

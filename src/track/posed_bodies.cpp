@@ -586,6 +586,23 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
     return;
   }
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
+  const std::size_t padded = loadPoints(points);
+  for (SurfaceHit& h : hits) h = SurfaceHit{-1, -1, std::numeric_limits<float>::infinity()};
+  if (n == 0) return;
+  listFirstBodies(points, hints, padded);
+  testListed(points, padded, exact, hits);
+  if (settle != nullptr) settleFirstHits(n, padded, settle, settled);
+  listReachablePoints(n, padded);
+  testListed(points, padded, exact, hits);
+#else
+  (void)settle;
+  (void)settled;
+#endif
+}
+
+#if defined(DYNAHAND_PLANE_SCAN_AVX)
+std::size_t PosedBodies::loadPoints(std::span<const Vec3> points) const {
+  const std::size_t n = points.size();
   const auto bodyCount = static_cast<std::size_t>(size());
   // Points as SoA, padded to eight with copies of the last (never reported).
   const std::size_t padded = (n + 7) / 8 * 8;
@@ -600,60 +617,19 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
     py_[i] = p.y();
     pz_[i] = p.z();
   }
-  for (SurfaceHit& h : hits) h = SurfaceHit{-1, -1, std::numeric_limits<float>::infinity()};
   // Each body's list of points to test: row b of a (bodies x padded) table (a list never
-  // holds more than the n points, and the branch-free appends below write at most seven
-  // entries past its end, still inside the row).
+  // holds more than the n points, and the branch-free appends of listReachablePoints write at
+  // most seven entries past its end, still inside the row).
   tests_.resize(bodyCount * padded);
   testCount_.assign(bodyCount, 0);
-  if (n == 0) return;
+  return padded;
+}
 
-  const bool masked = maskScan.load(std::memory_order_relaxed);
-  // Tests every point listed for each body, eight per scan, keeping each point's least
-  // (distance, body): the planar answer, or the exact one from the plane scan's bound.
-  auto runTests = [&] {
-    alignas(32) float wx[8], wy[8], wz[8], lx[8], ly[8], lz[8], stop[8], largest[8];
-    alignas(32) std::int32_t face[8];
-    for (std::size_t b = 0; b < bodyCount; ++b) {
-      const int* list = tests_.data() + b * padded;
-      const auto count = static_cast<std::size_t>(testCount_[b]);
-      const PlaneTable& table = planes_[b];
-      const std::size_t planes = table.nx.size();  // padded to a multiple of eight
-      for (std::size_t start = 0; start < count; start += 8) {
-        const std::size_t lanes = std::min<std::size_t>(8, count - start);
-        for (std::size_t k = 0; k < 8; ++k) {
-          const auto i = static_cast<std::size_t>(list[start + std::min(k, lanes - 1)]);
-          wx[k] = px_[i];
-          wy[k] = py_[i];
-          wz[k] = pz_[i];
-          stop[k] = bestDistance_[i];
-        }
-        if (masked && planes <= kMaskedScanPlanes)
-          scanEightAvx512(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
-                          table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, largest,
-                          face);
-        else
-          scanEightAvx(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
-                       table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, largest,
-                       face);
-        for (std::size_t k = 0; k < lanes; ++k) {
-          // Farther than the best (outside, the exact distance is at least the plane's).
-          const float sd = largest[k];
-          if (sd > stop[k]) continue;
-          const auto i = static_cast<std::size_t>(list[start + k]);
-          const Vec3 local(lx[k], ly[k], lz[k]);
-          const SurfaceHit hit =
-              exact ? exactHit(b, local, sd, face[k]) : planarHit(b, points[i], local, face[k], sd);
-          if (beats(hit, hits[i])) {
-            hits[i] = hit;
-            bestDistance_[i] = hit.distance;
-          }
-        }
-      }
-    }
-  };
-  // First each point's hint (or the body whose sphere is nearest): a tight bound.
-  for (std::size_t i = 0; i < n; ++i) {
+void PosedBodies::listFirstBodies(std::span<const Vec3> points, std::span<const int> hints,
+                                  std::size_t padded) const {
+  const auto bodyCount = static_cast<std::size_t>(size());
+  // Each point's hint (or the body whose sphere is nearest): a tight bound.
+  for (std::size_t i = 0; i < points.size(); ++i) {
     int first = hints[i];
     if (first < 0 || first >= size()) {
       float nearest = std::numeric_limits<float>::infinity();
@@ -672,24 +648,76 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
     const auto b = static_cast<std::size_t>(first);
     tests_[b * padded + static_cast<std::size_t>(testCount_[b]++)] = static_cast<int>(i);
   }
-  runTests();
-  if (settle != nullptr) {
-    // Settling (nearestManySettling): a point stays settled unless some body that could hold
-    // it at its first body's distance has a running errFit below that distance. A settled
-    // point is tested against no other body (a best of -infinity reaches no sphere).
-    for (std::size_t i = 0; i < n; ++i) settled[i] = first_[i] >= 0.0f ? 1 : 0;
-    for (std::size_t b = 0; b < bodyCount; ++b)
-      unsettleByBody(px_.data(), py_.data(), pz_.data(), bestDistance_.data(), first_.data(),
-                     padded, static_cast<float>(b), sphereX_[b], sphereY_[b], sphereZ_[b],
-                     sphereR_[b], settle[b], settled);
-    for (std::size_t i = 0; i < n; ++i)
-      if (settled[i]) bestDistance_[i] = -std::numeric_limits<float>::infinity();
+}
+
+void PosedBodies::testListed(std::span<const Vec3> points, std::size_t padded, bool exact,
+                             std::span<SurfaceHit> hits) const {
+  // Tests every point listed for each body, eight per scan, keeping each point's least
+  // (distance, body): the planar answer, or the exact one from the plane scan's bound.
+  const auto bodyCount = static_cast<std::size_t>(size());
+  const bool masked = maskScan.load(std::memory_order_relaxed);
+  alignas(32) float wx[8], wy[8], wz[8], lx[8], ly[8], lz[8], stop[8], largest[8];
+  alignas(32) std::int32_t face[8];
+  for (std::size_t b = 0; b < bodyCount; ++b) {
+    const int* list = tests_.data() + b * padded;
+    const auto count = static_cast<std::size_t>(testCount_[b]);
+    const PlaneTable& table = planes_[b];
+    const std::size_t planes = table.nx.size();  // padded to a multiple of eight
+    for (std::size_t start = 0; start < count; start += 8) {
+      const std::size_t lanes = std::min<std::size_t>(8, count - start);
+      for (std::size_t k = 0; k < 8; ++k) {
+        const auto i = static_cast<std::size_t>(list[start + std::min(k, lanes - 1)]);
+        wx[k] = px_[i];
+        wy[k] = py_[i];
+        wz[k] = pz_[i];
+        stop[k] = bestDistance_[i];
+      }
+      if (masked && planes <= kMaskedScanPlanes)
+        scanEightAvx512(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
+                        table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, largest,
+                        face);
+      else
+        scanEightAvx(poses_[b].q, poses_[b].p, wx, wy, wz, table.nx.data(), table.ny.data(),
+                     table.nz.data(), table.offset.data(), planes, stop, lx, ly, lz, largest, face);
+      for (std::size_t k = 0; k < lanes; ++k) {
+        // Farther than the best (outside, the exact distance is at least the plane's).
+        const float sd = largest[k];
+        if (sd > stop[k]) continue;
+        const auto i = static_cast<std::size_t>(list[start + k]);
+        const Vec3 local(lx[k], ly[k], lz[k]);
+        const SurfaceHit hit =
+            exact ? exactHit(b, local, sd, face[k]) : planarHit(b, points[i], local, face[k], sd);
+        if (beats(hit, hits[i])) {
+          hits[i] = hit;
+          bestDistance_[i] = hit.distance;
+        }
+      }
+    }
   }
-  // Then every other body whose sphere could still beat or tie a point's best (a tie goes to
-  // the lower index, as in the one-point queries; testing a body that cannot win changes
+}
+
+void PosedBodies::settleFirstHits(std::size_t n, std::size_t padded, const float* settle,
+                                  std::uint8_t* settled) const {
+  // Settling (nearestManySettling): a point stays settled unless some body that could hold
+  // it at its first body's distance has a running errFit below that distance. A settled
+  // point is tested against no other body (a best of -infinity reaches no sphere).
+  const auto bodyCount = static_cast<std::size_t>(size());
+  for (std::size_t i = 0; i < n; ++i) settled[i] = first_[i] >= 0.0f ? 1 : 0;
+  for (std::size_t b = 0; b < bodyCount; ++b)
+    unsettleByBody(px_.data(), py_.data(), pz_.data(), bestDistance_.data(), first_.data(), padded,
+                   static_cast<float>(b), sphereX_[b], sphereY_[b], sphereZ_[b], sphereR_[b],
+                   settle[b], settled);
+  for (std::size_t i = 0; i < n; ++i)
+    if (settled[i]) bestDistance_[i] = -std::numeric_limits<float>::infinity();
+}
+
+void PosedBodies::listReachablePoints(std::size_t n, std::size_t padded) const {
+  // Every other body whose sphere could still beat or tie a point's best (a tie goes to the
+  // lower index, as in the one-point queries; testing a body that cannot win changes
   // nothing). The sphere gap is a lower bound on both the planar and the exact distance.
   // Appended without branches (the reachable lanes are unpredictable): eight indices
   // compressed by a table, written whole, the count advanced by the mask's bits.
+  const auto bodyCount = static_cast<std::size_t>(size());
   const int lastLanes = (1 << (n - (padded - 8))) - 1;  // the real points of the last eight
   for (std::size_t b = 0; b < bodyCount; ++b) {
     testCount_[b] =
@@ -697,9 +725,8 @@ void PosedBodies::nearestMany(std::span<const Vec3> points, std::span<const int>
                            padded, lastLanes, static_cast<float>(b), sphereX_[b], sphereY_[b],
                            sphereZ_[b], sphereR_[b], tests_.data() + b * padded);
   }
-  runTests();
-#endif
 }
+#endif
 
 SurfaceHit PosedBodies::nearest(const Vec3& p, BodyMask mask, int hint) const {
   // Bounding-sphere lower bounds; the body with the smallest goes first for a tight best

@@ -124,6 +124,18 @@ class PosedBodies {
   void nearestMany(std::span<const Vec3> points, std::span<const int> hints,
                    std::span<SurfaceHit> hits, bool exact, const float* settle = nullptr,
                    std::uint8_t* settled = nullptr) const;
+  // nearestMany's wide path, stage by stage: the points into the SoA scratch (returns their
+  // count padded to eight), each point listed under its first body, the listed points tested
+  // eight at a time, settling, then each point listed under every other body that could
+  // still beat its best.
+  std::size_t loadPoints(std::span<const Vec3> points) const;
+  void listFirstBodies(std::span<const Vec3> points, std::span<const int> hints,
+                       std::size_t padded) const;
+  void testListed(std::span<const Vec3> points, std::size_t padded, bool exact,
+                  std::span<SurfaceHit> hits) const;
+  void settleFirstHits(std::size_t n, std::size_t padded, const float* settle,
+                       std::uint8_t* settled) const;
+  void listReachablePoints(std::size_t n, std::size_t padded) const;
   // The bulk queries' scratch: the points as SoA, each point's first body (as a float, for
   // eight-wide compares; -1 for none), per body the points to test (a row of tests_ each) and
   // their count, each point's best so far.

@@ -242,29 +242,7 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
 #endif
       sampler.row(rowBase, across, tMin, 0, columns, on);
     scanlineRuns(on, columns, runs_);
-    // Continue segments: a run overlapping previous runs joins the first one's segment;
-    // overlapping several means they came together.
-    for (Run& run : runs_) {
-      int overlaps = 0;
-      for (const Run& prev : previousRuns_) {
-        if (prev.end > run.begin && prev.begin < run.end) {
-          if (run.segment < 0) run.segment = prev.segment;
-          ++overlaps;
-        }
-      }
-      if (run.segment < 0) {
-        run.segment = static_cast<int>(segments_.size());
-        segments_.push_back({row, 0.5f * static_cast<float>(run.begin + run.end - 1), 0});
-      }
-      Segment& seg = segments_[static_cast<std::size_t>(run.segment)];
-      if (overlaps > 1) seg.decided = true;  // merged: no longer one finger on its own
-      ++seg.length;
-      if (!seg.decided && seg.length == minLength) {
-        seg.decided = true;
-        const float w = static_cast<float>(run.end - run.begin);
-        seg.fingerLike = w >= minWidth && w <= maxWidth;
-      }
-    }
+    continueSegments(row, minLength, minWidth, maxWidth);
     // Fire once five fingers were seen apart and the scan has reached the palm: at most two
     // runs (the palm, and possibly the thumb still apart; the thumb, lower on the hand, may
     // start after the four fingers have met).
@@ -280,51 +258,85 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
       return !segments_[static_cast<std::size_t>(r.segment)].decided;
     });
     if (fingers == 5 && runs_.size() <= 2 && !undecided) {
-      // Fingertips: the top of each segment, ordered across the hand.
-      std::array<std::pair<float, int>, 5> order;
-      for (int i = 0; i < 5; ++i) {
-        const Segment& seg =
-            segments_[static_cast<std::size_t>(fiveSegments[static_cast<std::size_t>(i)])];
-        order[static_cast<std::size_t>(i)] = {seg.topColumn,
-                                              fiveSegments[static_cast<std::size_t>(i)]};
-      }
-      std::sort(order.begin(), order.end());
-      // The thumb is the end finger whose tip is lower (nearer the wrist).
-      const int firstTop = segments_[static_cast<std::size_t>(order[0].second)].topRow;
-      const int lastTop = segments_[static_cast<std::size_t>(order[4].second)].topRow;
-      const bool thumbFirst = firstTop > lastTop;
-      result_.axisImage = axis;
-      result_.thumbSideImage = thumbFirst ? Vec2(-across) : across;
-      for (int i = 0; i < 5; ++i) {
-        const int j = thumbFirst ? i : 4 - i;
-        const Segment& seg =
-            segments_[static_cast<std::size_t>(order[static_cast<std::size_t>(j)].second)];
-        // Step a little into the finger so the depth sample is on it, not its edge.
-        const float sTip = sMax - static_cast<float>(seg.topRow) - 0.004f * pxPerM;
-        const Vec2 p = c + axis * sTip + across * (tMin + seg.topColumn);
-        const int u = std::clamp(static_cast<int>(std::lround(p.x())), 0, width - 1);
-        const int v = std::clamp(static_cast<int>(std::lround(p.y())), 0, k.height - 1);
-        float depth = cloud.depthAt(u, v);
-        for (int r = 1; depth <= 0.0f && r <= 3; ++r) {  // nearest valid sample nearby
-          for (int dv = -r; dv <= r && depth <= 0.0f; ++dv) {
-            for (int du = -r; du <= r && depth <= 0.0f; ++du) {
-              const int uu = std::clamp(u + du, 0, width - 1),
-                        vv = std::clamp(v + dv, 0, k.height - 1);
-              if (cloud.mask[static_cast<std::size_t>(vv * width + uu)])
-                depth = cloud.depthAt(uu, vv);
-            }
-          }
-        }
-        if (depth <= 0.0f) return false;
-        result_.tipPixels[static_cast<std::size_t>(i)] = p;
-        result_.tips[static_cast<std::size_t>(i)] = k.deproject(p.x(), p.y(), depth);
-      }
-      result_.fired = true;
-      return true;
+      result_.fired = placeTips(cloud, TipFrame{c, axis, sMax, tMin, pxPerM}, fiveSegments);
+      return result_.fired;
     }
     std::swap(runs_, previousRuns_);
   }
   return false;
+}
+
+void FingerDetector::continueSegments(int row, int minLength, float minWidth, float maxWidth) {
+  // A run overlapping previous runs joins the first one's segment; overlapping several means
+  // they came together.
+  for (Run& run : runs_) {
+    int overlaps = 0;
+    for (const Run& prev : previousRuns_) {
+      if (prev.end > run.begin && prev.begin < run.end) {
+        if (run.segment < 0) run.segment = prev.segment;
+        ++overlaps;
+      }
+    }
+    if (run.segment < 0) {
+      run.segment = static_cast<int>(segments_.size());
+      segments_.push_back({row, 0.5f * static_cast<float>(run.begin + run.end - 1), 0});
+    }
+    Segment& seg = segments_[static_cast<std::size_t>(run.segment)];
+    if (overlaps > 1) seg.decided = true;  // merged: no longer one finger on its own
+    ++seg.length;
+    if (!seg.decided && seg.length == minLength) {
+      seg.decided = true;
+      const float w = static_cast<float>(run.end - run.begin);
+      seg.fingerLike = w >= minWidth && w <= maxWidth;
+    }
+  }
+}
+
+bool FingerDetector::placeTips(const CloudFrame& cloud, const TipFrame& f,
+                               const std::array<int, 5>& fiveSegments) {
+  const Intrinsics& k = cloud.intrinsics;
+  const int width = k.width;
+  const Vec2& c = f.centre;
+  const Vec2& axis = f.axis;
+  const Vec2 across(-axis.y(), axis.x());
+  const float sMax = f.sMax, tMin = f.tMin, pxPerM = f.pxPerM;
+  // Fingertips: the top of each segment, ordered across the hand.
+  std::array<std::pair<float, int>, 5> order;
+  for (int i = 0; i < 5; ++i) {
+    const Segment& seg =
+        segments_[static_cast<std::size_t>(fiveSegments[static_cast<std::size_t>(i)])];
+    order[static_cast<std::size_t>(i)] = {seg.topColumn, fiveSegments[static_cast<std::size_t>(i)]};
+  }
+  std::sort(order.begin(), order.end());
+  // The thumb is the end finger whose tip is lower (nearer the wrist).
+  const int firstTop = segments_[static_cast<std::size_t>(order[0].second)].topRow;
+  const int lastTop = segments_[static_cast<std::size_t>(order[4].second)].topRow;
+  const bool thumbFirst = firstTop > lastTop;
+  result_.axisImage = axis;
+  result_.thumbSideImage = thumbFirst ? Vec2(-across) : across;
+  for (int i = 0; i < 5; ++i) {
+    const int j = thumbFirst ? i : 4 - i;
+    const Segment& seg =
+        segments_[static_cast<std::size_t>(order[static_cast<std::size_t>(j)].second)];
+    // Step a little into the finger so the depth sample is on it, not its edge.
+    const float sTip = sMax - static_cast<float>(seg.topRow) - 0.004f * pxPerM;
+    const Vec2 p = c + axis * sTip + across * (tMin + seg.topColumn);
+    const int u = std::clamp(static_cast<int>(std::lround(p.x())), 0, width - 1);
+    const int v = std::clamp(static_cast<int>(std::lround(p.y())), 0, k.height - 1);
+    float depth = cloud.depthAt(u, v);
+    for (int r = 1; depth <= 0.0f && r <= 3; ++r) {  // nearest valid sample nearby
+      for (int dv = -r; dv <= r && depth <= 0.0f; ++dv) {
+        for (int du = -r; du <= r && depth <= 0.0f; ++du) {
+          const int uu = std::clamp(u + du, 0, width - 1), vv = std::clamp(v + dv, 0, k.height - 1);
+          if (cloud.mask[static_cast<std::size_t>(vv * width + uu)]) depth = cloud.depthAt(uu, vv);
+        }
+      }
+    }
+    if (depth <= 0.0f) return false;
+    result_.tipPixels[static_cast<std::size_t>(i)] = p;
+    result_.tips[static_cast<std::size_t>(i)] = k.deproject(p.x(), p.y(), depth);
+  }
+  return true;
 }
 
 }  // namespace dynahand::track

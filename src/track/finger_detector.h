@@ -64,6 +64,20 @@ class FingerDetector {
   // One scan with scanlines across `axis` (wrist -> fingertips, image) through the mask
   // centroid c; fills result_ and returns true when it fires.
   bool scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec2& axis);
+  // scanAlong's stages: this row's runs_ continue the segments of previousRuns_ (a segment
+  // is decided finger-like or not once minLength rows long, or when it merges); and, once five
+  // finger-like segments were seen, the fingertips at their tops into result_ (false when a
+  // tip has no depth near it).
+  void continueSegments(int row, int minLength, float minWidth, float maxWidth);
+  struct TipFrame {
+    Vec2 centre;   // the mask centroid c, pixels
+    Vec2 axis;     // wrist -> fingertips, image, unit
+    float sMax;    // the scan's first row along axis from c, pixels
+    float tMin;    // the scanlines' first sample across axis from c, pixels
+    float pxPerM;  // pixels per metre at the hand's depth
+  };
+  bool placeTips(const CloudFrame& cloud, const TipFrame& frame,
+                 const std::array<int, 5>& fiveSegments);
   FingerDetectorSettings settings_;
   FingerDetection result_;
   std::vector<Run> runs_, previousRuns_;

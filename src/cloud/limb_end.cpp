@@ -130,7 +130,23 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
   }
   if (!attached) return -1;
 
-  // 2. Steps along the surface from the nearest attachment (breadth-first from all of them).
+  stepFromAttachments(grid, k, rule);
+  return farthestCell(grid.width);
+}
+
+void LimbEndFinder::stepFromAttachments(const DepthGrid& grid, const Intrinsics& k,
+                                        const DepthStepRule& rule) {
+  // Steps along the surface from the nearest attachment (breadth-first from all of them).
+  const int w = grid.width;
+  const int h = grid.height;
+  const float* depth = grid.depth;
+  const auto step = static_cast<float>(grid.step);
+  const float spacingX = step / k.fx;
+  const float spacingY = step / k.fy;
+  const auto joined = [&](float za, float zb, float spacing) {
+    return std::fabs(za - zb) <= maxDepthStep(rule, std::max(za, zb), spacing);
+  };
+  const auto pack = [](int i, int j) { return (j << 16) | i; };
   for (std::size_t q = 0; q < queue_.size(); ++q) {
     const int i = queue_[q] & 0xffff;
     const int j = queue_[q] >> 16;
@@ -148,12 +164,14 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
     if (j > 0) relax(c - w, i, j - 1, spacingY);
     if (j + 1 < h) relax(c + w, i, j + 1, spacingY);
   }
+}
 
-  // 3. The farthest reachable cell (first in discovery order on ties: deterministic).
+int LimbEndFinder::farthestCell(int width) const {
+  // The farthest reachable cell (first in discovery order on ties: deterministic).
   int end = -1;
   int farthest = -1;
   for (const std::int32_t packed : cells_) {
-    const int c = (packed >> 16) * w + (packed & 0xffff);
+    const int c = (packed >> 16) * width + (packed & 0xffff);
     const int d = steps_[static_cast<std::size_t>(c)];
     if (d > farthest) {
       farthest = d;

@@ -34,6 +34,11 @@ class LimbEndFinder {
            const std::uint8_t* planeCells = nullptr);
 
  private:
+  // find's stages after the surface and its attachments are found: steps along the surface
+  // from the attachments (breadth-first), then the cell farthest from all of them.
+  void stepFromAttachments(const DepthGrid& grid, const Intrinsics& k, const DepthStepRule& rule);
+  int farthestCell(int width) const;
+
   std::vector<int> steps_;           // (cells) steps along the surface from an attachment, -1
   std::vector<std::uint8_t> state_;  // (cells) 0 = unseen, 1 = on the surface, 2 = attachment
   // Packed cells (j << 16 | i):

@@ -128,6 +128,14 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
                            const std::vector<SolverBody>& bodies, int dummySlot) {
   slotCount_ = static_cast<int>(bodies.size());
   const int n = static_cast<int>(rows.size());
+  const auto slots = static_cast<std::size_t>(assignSolvingSlots(rows));
+  const int largest = groupRowsBySlot(n, slots);
+  const int batchCount = dealIntoTable(n, largest);
+  fillBatches(rows, batchCount, dummySlot);
+}
+
+int SurfaceBatches::assignSolvingSlots(const std::vector<PreparedSurfaceRow>& rows) {
+  const int n = static_cast<int>(rows.size());
   // Slots with more than a quarter of the rows are split (see the header), but not small
   // sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster. (A quarter:
   // kOrderLanes, and the split decides the results.)
@@ -172,7 +180,10 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     for (int j = 0; j < sp.copies; ++j)
       massScale_[static_cast<std::size_t>(slotCount_ + sp.first + j)] =
           static_cast<float>(sp.copies);
-  const auto slots = static_cast<std::size_t>(slotCountAll);
+  return slotCountAll;
+}
+
+int SurfaceBatches::groupRowsBySlot(int n, std::size_t slots) {
   // Rows grouped by solving slot (counting sort, stable), slots by decreasing row count.
   count_.assign(slots, 0);
   for (int i = 0; i < n; ++i)
@@ -203,6 +214,10 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
   const int largest = slots == 0 ? 0
                                  : start_[static_cast<std::size_t>(slotsByCount_[0]) + 1] -
                                        start_[static_cast<std::size_t>(slotsByCount_[0])];
+  return largest;
+}
+
+int SurfaceBatches::dealIntoTable(int n, int largest) {
   // The rows are dealt, slot after slot, down the columns of a (batches x 8) table: a slot's
   // run is at most `batchCount` long, so its rows land in different batches, and each lane of
   // the sweep stays on one slot for a long run of batches (the sweep keeps that slot's
@@ -250,6 +265,11 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
     }
     position += length;
   }
+  return batchCount;
+}
+
+void SurfaceBatches::fillBatches(const std::vector<PreparedSurfaceRow>& rows, int batchCount,
+                                 int dummySlot) {
   // Filled batch after batch (row after row would write each batch's eight cache lines
   // once per row). Cells left over are padding on the dummy slot, all zero: they never act.
   static const PreparedSurfaceRow kPaddingRow{};

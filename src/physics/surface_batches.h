@@ -51,6 +51,15 @@ class SurfaceBatches {
   void reserve(int rows);
 
  private:
+  // build's stages: each row's solving slot (its own, or for a slot with many rows one of its
+  // copies in turn) and the copies' mass scales, returning the solving slots' count; the rows
+  // grouped by solving slot and the slots by decreasing row count, returning the largest
+  // count; the rows dealt into the (batches x 8) table, returning the batch count; the
+  // batches filled from the table.
+  int assignSolvingSlots(const std::vector<PreparedSurfaceRow>& rows);
+  int groupRowsBySlot(int n, std::size_t slots);
+  int dealIntoTable(int n, int largest);
+  void fillBatches(const std::vector<PreparedSurfaceRow>& rows, int batchCount, int dummySlot);
   friend struct SurfaceSweeps;  // the sweeps' loops (surface_batches.cpp)
   static constexpr int kLanes = 8;
   // A batch: what the sweeps read, two fields to a cache line (relaxBias last: only the relax

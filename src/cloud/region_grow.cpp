@@ -118,43 +118,11 @@ constexpr float kMaxOccluderStepM = 0.06f;
 enum AcrossSide : std::uint8_t { kInFront = 0, kBehind = 1, kFarBehind = 2 };
 }  // namespace
 
-GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radiusM,
-                               float minAreaM2) {
-  assert(seed >= 0 && static_cast<std::size_t>(seed) < labels_.size());
-  const int w = grid_.width;
-  const int h = grid_.height;
-  const float* depth = grid_.depth;
-  std::uint8_t* visited = visited_.data();
-  std::uint8_t* separate = separate_.data();
-  std::uint8_t* acrossQueued = acrossQueued_.data();
-  const std::uint8_t* labels = labels_.data();
-  const float* columnX = columnX_.data();
-  const float* rowY = rowY_.data();
-  const auto step = static_cast<float>(grid_.step);
-  const float spacingX = step / k_.fx;  // lateral m per m of depth between neighbours
-  const float spacingY = step / k_.fy;
-  const float areaPerZ2 = spacingX * spacingY;
-  const float minAreaZ2 = minAreaM2 / areaPerZ2;  // minAreaM2 as a sum of z^2
-  // A surface across a depth step covering more than half the ball's cross-section is
-  // larger than a hand and forearm inside the ball: a wall, a table or the torso.
-  const float maxPartAreaZ2 = 0.5f * std::numbers::pi_v<float> * radiusM * radiusM / areaPerZ2;
-  const float radius2 = radiusM * radiusM;
-
-  ++attempt_;
-  if (attempt_ == 0) {  // stamp wrap-around: wipe once
-    std::fill(visited_.begin(), visited_.end(), std::uint8_t{0});
-    std::fill(separate_.begin(), separate_.end(), std::uint8_t{0});
-    std::fill(acrossQueued_.begin(), acrossQueued_.end(), std::uint8_t{0});
-    attempt_ = 1;
-  }
-  const std::uint8_t stamp = attempt_;
-  const int seedI = seed % w;
-  const int seedJ = seed / w;
-  const float seedZ = depth[seed];
-  const Vec3 nearest(columnX[seedI] * seedZ, rowY[seedJ] * seedZ, seedZ);
-
-  // Accumulators in locals (registers), written to the result once at the end. A copy
-  // is kept while a surface across a depth step is tried, to undo it.
+// grow's running state: the settings of this call, the region's sums, the queue's ends and
+// the surface across a depth step being tried.
+struct RegionGrower::Growth {
+  // Accumulators, written to the result once at the end. A copy is kept while a surface
+  // across a depth step is tried, to undo it.
   struct Sums {
     Vec3 pointSum = Vec3::Zero();
     float iSum = 0.0f;
@@ -167,20 +135,24 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
     float cutJSum = 0.0f;
     bool touches = false;
   };
+  const DepthStepRule* rule = nullptr;
+  float spacingX = 0.0f;  // lateral m per m of depth between neighbours
+  float spacingY = 0.0f;
+  float areaPerZ2 = 0.0f;
+  float minAreaZ2 = 0.0f;      // minAreaM2 as a sum of z^2
+  float maxPartAreaZ2 = 0.0f;  // see beginGrowth
+  float radius2 = 0.0f;        // m^2
+  std::uint8_t stamp = 0;
+  Vec3 nearest = Vec3::Zero();  // the seed's point
   Sums sums;
-  sums.minI = sums.maxI = seedI;
-  sums.minJ = sums.maxJ = seedJ;
-
-  // The queue holds packed cell coordinates (j << 16 | i): no division per cell.
-  std::int32_t* queue = queue_.data();
+  // The queue holds packed cell coordinates (j << 16 | i): the region from the front, its
+  // cut cells from the back.
   int head = 0;
   int tail = 0;
-  int cutTop = static_cast<int>(queue_.size());
+  int cutTop = 0;
   // Cells across a depth step from the region (too large for the step rule, not an
-  // occluder) within its ball, and on which side they lie. Tried once the region's own
-  // surface is complete (see below).
-  std::int32_t* across = across_.data();
-  std::uint8_t* acrossSide = acrossSide_.data();
+  // occluder) within its ball, and on which side they lie (across_, acrossSide_). Tried once
+  // the region's own surface is complete.
   int acrossHead = 0;
   int acrossTail = 0;
   // While a surface across a step is tried: its side and area limit, the state to return
@@ -191,165 +163,243 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   std::uint8_t trySide = kInFront;
   bool fragmentsChecked = false;
   bool fromFragments = false;     // the seed's surface alone is smaller than minAreaM2
-  bool inFrontOfSurface = false;  // see below: not a volume of its own
+  bool inFrontOfSurface = false;  // see settleTriedSurface: not a volume of its own
   Sums before;
   int tailBefore = 0;
   int cutTopBefore = 0;
   int acrossTailBefore = 0;
+};
 
-  visited[seed] = stamp;
-  queue[tail++] = (seedJ << 16) | seedI;
+GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radiusM,
+                               float minAreaM2) {
+  assert(seed >= 0 && static_cast<std::size_t>(seed) < labels_.size());
+  Growth g = beginGrowth(seed, rule, radiusM, minAreaM2);
   for (;;) {
-    while (head < tail) {
-      const std::int32_t packed = queue[head++];
-      const int i = packed & 0xffff;
-      const int j = packed >> 16;
-      const int c = j * w + i;
-      const float z = depth[c];
-      sums.pointSum += Vec3(columnX[i] * z, rowY[j] * z, z);
-      sums.iSum += static_cast<float>(i);
-      sums.jSum += static_cast<float>(j);
-      sums.areaZ2 += z * z;
-      sums.minI = std::min(sums.minI, i);
-      sums.maxI = std::max(sums.maxI, i);
-      sums.minJ = std::min(sums.minJ, j);
-      sums.maxJ = std::max(sums.maxJ, j);
-      const float limitX = maxDepthStep(rule, z, spacingX);
-      const float limitY = maxDepthStep(rule, z, spacingY);
-      const auto visit = [&](int n, int ni, int nj, float limit) {
-        if (visited[n] == stamp) {
-          // A surface being tried that continues into one found separate is part of it.
-          if (trying && separate[n] == stamp && std::fabs(depth[n] - z) <= limit) {
-            joinsSeparate = true;
-          }
-          return;
-        }
-        const float zn = depth[n];
-        if (zn == 0.0f) return;
-        // A surface in front of this one, close behind it in depth, occludes it: a finger
-        // curled in front of the palm or a thumb across it. It belongs to the same volume
-        // even across a depth step (the step rule only stops steps away from the camera),
-        // and even if it was passed over before as too small on its own.
-        const bool occluder = zn < z && z - zn <= kMaxOccluderStepM;
-        if (!occluder && std::fabs(zn - z) > limit) {
-          // Another surface across a depth step; within the hand's ball it may still be part
-          // of the same volume. Decided once the region's own surfaces are complete.
-          if (acrossQueued[n] != stamp && (labels[n] == kFree || (labels[n] == kTried && zn < z))) {
-            const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
-            if ((q - nearest).squaredNorm() <= radius2) {
-              acrossQueued[n] = stamp;
-              acrossSide[acrossTail] = zn < z                        ? kInFront
-                                       : zn - z <= kMaxOccluderStepM ? kBehind
-                                                                     : kFarBehind;
-              across[acrossTail++] = (nj << 16) | ni;
-            }
-          }
-          return;
-        }
-        const std::uint8_t label = labels[n];
-        if (label != kFree && !(label == kTried && occluder)) {
-          // Connected to an accepted region or its cut: this is not a separate volume.
-          sums.touches |= label != kTried;
-          return;
-        }
-        visited[n] = stamp;
-        const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
-        if ((q - nearest).squaredNorm() <= radius2) {
-          queue[tail++] = (nj << 16) | ni;
-        } else {
-          queue[--cutTop] = (nj << 16) | ni;
-          ++sums.cutCount;
-          sums.cutPointSum += q;
-          sums.cutISum += static_cast<float>(ni);
-          sums.cutJSum += static_cast<float>(nj);
-        }
-      };
-      if (i > 0) visit(c - 1, i - 1, j, limitX);
-      if (i + 1 < w) visit(c + 1, i + 1, j, limitX);
-      if (j > 0) visit(c - w, i, j - 1, limitY);
-      if (j + 1 < h) visit(c + w, i, j + 1, limitY);
-      if (trying && (joinsSeparate || sums.areaZ2 - before.areaZ2 > partLimitZ2)) break;
-    }
-    if (!trying && !fragmentsChecked) {
+    floodSurface(g);
+    if (!g.trying && !g.fragmentsChecked) {
       // The seed's own surface is complete.
-      fragmentsChecked = true;
-      fromFragments = sums.areaZ2 < minAreaZ2;
+      g.fragmentsChecked = true;
+      g.fromFragments = g.sums.areaZ2 < g.minAreaZ2;
     }
-    if (trying) {
-      trying = false;
-      const float partZ2 = sums.areaZ2 - before.areaZ2;
-      // Fragments in front of a surface close behind them (not a fragment itself) are
-      // pieces of that surface broken up by holes or steep sides (a fingertip in front of
-      // the palm, the torso's edge): not a volume of their own.
-      if (fromFragments && trySide == kBehind && (joinsSeparate || partZ2 >= minAreaZ2)) {
-        inFrontOfSurface = true;
-      }
-      if (inFrontOfSurface || joinsSeparate || partZ2 > partLimitZ2) {
-        // Too large to be part of the hand: a surface of its own. Its cells stay visited and
-        // are marked separate, so the rest of that surface is recognised from any side.
-        for (int q = tailBefore; q < tail; ++q) separate[cellOf(queue[q])] = stamp;
-        for (int q = cutTop; q < cutTopBefore; ++q) visited[cellOf(queue[q])] = 0;
-        for (int q = acrossTailBefore; q < acrossTail; ++q) acrossQueued[cellOf(across[q])] = 0;
-        sums = before;
-        head = tail = tailBefore;
-        cutTop = cutTopBefore;
-        acrossTail = acrossTailBefore;
-      }
-      if (inFrontOfSurface) break;
-    }
-    // The next surface across a depth step from the region, within its ball. A region
-    // smaller than minAreaM2 is not a hand yet: it collects the fragments (surfaces smaller
-    // than minAreaM2) beside it at any step, e.g. fingers pointing at the camera, each a few
-    // cm in front of the next. Once large enough it takes fragments in front of it (more
-    // fingers) and surfaces behind it within kMaxOccluderStepM (the palm behind curled
-    // fingers) unless larger than a hand and forearm can be inside the ball (a wall, a
-    // table, the torso).
-    std::int32_t next = -1;
-    if (sums.areaZ2 < minAreaZ2) {
-      while (acrossHead < acrossTail) {
-        const int index = acrossHead++;
-        const std::int32_t packed = across[index];
-        if (visited[cellOf(packed)] == stamp) continue;
-        next = packed;
-        partLimitZ2 = minAreaZ2;
-        trySide = acrossSide[index];
-        break;
-      }
-    } else {
-      while (acrossHead < acrossTail) {
-        const int index = acrossHead++;
-        const std::int32_t packed = across[index];
-        const std::uint8_t side = acrossSide[index];
-        if (visited[cellOf(packed)] == stamp || side == kFarBehind) continue;
-        next = packed;
-        partLimitZ2 = side == kInFront ? minAreaZ2 : maxPartAreaZ2;
-        trySide = side;
-        break;
-      }
-    }
+    if (g.trying && settleTriedSurface(g)) break;
+    const std::int32_t next = nextSurfaceAcross(g);
     if (next < 0) break;
-    trying = true;
-    joinsSeparate = false;
-    before = sums;
-    tailBefore = tail;
-    cutTopBefore = cutTop;
-    acrossTailBefore = acrossTail;
-    visited[cellOf(next)] = stamp;
-    queue[tail++] = next;
+    g.trying = true;
+    g.joinsSeparate = false;
+    g.before = g.sums;
+    g.tailBefore = g.tail;
+    g.cutTopBefore = g.cutTop;
+    g.acrossTailBefore = g.acrossTail;
+    visited_[cellOf(next)] = g.stamp;
+    queue_[static_cast<std::size_t>(g.tail++)] = next;
   }
+  return finishGrowth(g);
+}
 
+RegionGrower::Growth RegionGrower::beginGrowth(int seed, const DepthStepRule& rule, float radiusM,
+                                               float minAreaM2) {
+  Growth g;
+  g.rule = &rule;
+  const auto step = static_cast<float>(grid_.step);
+  g.spacingX = step / k_.fx;
+  g.spacingY = step / k_.fy;
+  g.areaPerZ2 = g.spacingX * g.spacingY;
+  g.minAreaZ2 = minAreaM2 / g.areaPerZ2;
+  // A surface across a depth step covering more than half the ball's cross-section is
+  // larger than a hand and forearm inside the ball: a wall, a table or the torso.
+  g.maxPartAreaZ2 = 0.5f * std::numbers::pi_v<float> * radiusM * radiusM / g.areaPerZ2;
+  g.radius2 = radiusM * radiusM;
+
+  ++attempt_;
+  if (attempt_ == 0) {  // stamp wrap-around: wipe once
+    std::fill(visited_.begin(), visited_.end(), std::uint8_t{0});
+    std::fill(separate_.begin(), separate_.end(), std::uint8_t{0});
+    std::fill(acrossQueued_.begin(), acrossQueued_.end(), std::uint8_t{0});
+    attempt_ = 1;
+  }
+  g.stamp = attempt_;
+  const int seedI = seed % grid_.width;
+  const int seedJ = seed / grid_.width;
+  const float seedZ = grid_.depth[seed];
+  g.nearest = Vec3(columnX_[static_cast<std::size_t>(seedI)] * seedZ,
+                   rowY_[static_cast<std::size_t>(seedJ)] * seedZ, seedZ);
+  g.sums.minI = g.sums.maxI = seedI;
+  g.sums.minJ = g.sums.maxJ = seedJ;
+  g.cutTop = static_cast<int>(queue_.size());
+  visited_[static_cast<std::size_t>(seed)] = g.stamp;
+  queue_[static_cast<std::size_t>(g.tail++)] = (seedJ << 16) | seedI;
+  return g;
+}
+
+void RegionGrower::floodSurface(Growth& g) {
+  const int w = grid_.width;
+  const int h = grid_.height;
+  const float* depth = grid_.depth;
+  std::uint8_t* visited = visited_.data();
+  std::uint8_t* separate = separate_.data();
+  std::uint8_t* acrossQueued = acrossQueued_.data();
+  const std::uint8_t* labels = labels_.data();
+  const float* columnX = columnX_.data();
+  const float* rowY = rowY_.data();
+  std::int32_t* queue = queue_.data();
+  std::int32_t* across = across_.data();
+  std::uint8_t* acrossSide = acrossSide_.data();
+  const DepthStepRule& rule = *g.rule;
+  const float spacingX = g.spacingX;
+  const float spacingY = g.spacingY;
+  const float radius2 = g.radius2;
+  const std::uint8_t stamp = g.stamp;
+  const Vec3 nearest = g.nearest;
+  const bool trying = g.trying;
+  const float partLimitZ2 = g.partLimitZ2;
+  const float beforeAreaZ2 = g.before.areaZ2;
+  // The running state in locals (registers) while the queue drains, written back at the end.
+  Growth::Sums sums = g.sums;
+  int head = g.head;
+  int tail = g.tail;
+  int cutTop = g.cutTop;
+  int acrossTail = g.acrossTail;
+  bool joinsSeparate = g.joinsSeparate;
+  while (head < tail) {
+    const std::int32_t packed = queue[head++];
+    const int i = packed & 0xffff;
+    const int j = packed >> 16;
+    const int c = j * w + i;
+    const float z = depth[c];
+    sums.pointSum += Vec3(columnX[i] * z, rowY[j] * z, z);
+    sums.iSum += static_cast<float>(i);
+    sums.jSum += static_cast<float>(j);
+    sums.areaZ2 += z * z;
+    sums.minI = std::min(sums.minI, i);
+    sums.maxI = std::max(sums.maxI, i);
+    sums.minJ = std::min(sums.minJ, j);
+    sums.maxJ = std::max(sums.maxJ, j);
+    const float limitX = maxDepthStep(rule, z, spacingX);
+    const float limitY = maxDepthStep(rule, z, spacingY);
+    const auto visit = [&](int n, int ni, int nj, float limit) {
+      if (visited[n] == stamp) {
+        // A surface being tried that continues into one found separate is part of it.
+        if (trying && separate[n] == stamp && std::fabs(depth[n] - z) <= limit) {
+          joinsSeparate = true;
+        }
+        return;
+      }
+      const float zn = depth[n];
+      if (zn == 0.0f) return;
+      // A surface in front of this one, close behind it in depth, occludes it: a finger
+      // curled in front of the palm or a thumb across it. It belongs to the same volume
+      // even across a depth step (the step rule only stops steps away from the camera),
+      // and even if it was passed over before as too small on its own.
+      const bool occluder = zn < z && z - zn <= kMaxOccluderStepM;
+      if (!occluder && std::fabs(zn - z) > limit) {
+        // Another surface across a depth step; within the hand's ball it may still be part
+        // of the same volume. Decided once the region's own surfaces are complete.
+        if (acrossQueued[n] != stamp && (labels[n] == kFree || (labels[n] == kTried && zn < z))) {
+          const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
+          if ((q - nearest).squaredNorm() <= radius2) {
+            acrossQueued[n] = stamp;
+            acrossSide[acrossTail] = zn < z                        ? kInFront
+                                     : zn - z <= kMaxOccluderStepM ? kBehind
+                                                                   : kFarBehind;
+            across[acrossTail++] = (nj << 16) | ni;
+          }
+        }
+        return;
+      }
+      const std::uint8_t label = labels[n];
+      if (label != kFree && !(label == kTried && occluder)) {
+        // Connected to an accepted region or its cut: this is not a separate volume.
+        sums.touches |= label != kTried;
+        return;
+      }
+      visited[n] = stamp;
+      const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
+      if ((q - nearest).squaredNorm() <= radius2) {
+        queue[tail++] = (nj << 16) | ni;
+      } else {
+        queue[--cutTop] = (nj << 16) | ni;
+        ++sums.cutCount;
+        sums.cutPointSum += q;
+        sums.cutISum += static_cast<float>(ni);
+        sums.cutJSum += static_cast<float>(nj);
+      }
+    };
+    if (i > 0) visit(c - 1, i - 1, j, limitX);
+    if (i + 1 < w) visit(c + 1, i + 1, j, limitX);
+    if (j > 0) visit(c - w, i, j - 1, limitY);
+    if (j + 1 < h) visit(c + w, i, j + 1, limitY);
+    if (trying && (joinsSeparate || sums.areaZ2 - beforeAreaZ2 > partLimitZ2)) break;
+  }
+  g.sums = sums;
+  g.head = head;
+  g.tail = tail;
+  g.cutTop = cutTop;
+  g.acrossTail = acrossTail;
+  g.joinsSeparate = joinsSeparate;
+}
+
+bool RegionGrower::settleTriedSurface(Growth& g) {
+  g.trying = false;
+  const float partZ2 = g.sums.areaZ2 - g.before.areaZ2;
+  // Fragments in front of a surface close behind them (not a fragment itself) are
+  // pieces of that surface broken up by holes or steep sides (a fingertip in front of
+  // the palm, the torso's edge): not a volume of their own.
+  if (g.fromFragments && g.trySide == kBehind && (g.joinsSeparate || partZ2 >= g.minAreaZ2)) {
+    g.inFrontOfSurface = true;
+  }
+  if (g.inFrontOfSurface || g.joinsSeparate || partZ2 > g.partLimitZ2) {
+    // Too large to be part of the hand: a surface of its own. Its cells stay visited and
+    // are marked separate, so the rest of that surface is recognised from any side.
+    for (int q = g.tailBefore; q < g.tail; ++q)
+      separate_[cellOf(queue_[static_cast<std::size_t>(q)])] = g.stamp;
+    for (int q = g.cutTop; q < g.cutTopBefore; ++q)
+      visited_[cellOf(queue_[static_cast<std::size_t>(q)])] = 0;
+    for (int q = g.acrossTailBefore; q < g.acrossTail; ++q)
+      acrossQueued_[cellOf(across_[static_cast<std::size_t>(q)])] = 0;
+    g.sums = g.before;
+    g.head = g.tail = g.tailBefore;
+    g.cutTop = g.cutTopBefore;
+    g.acrossTail = g.acrossTailBefore;
+  }
+  return g.inFrontOfSurface;
+}
+
+std::int32_t RegionGrower::nextSurfaceAcross(Growth& g) {
+  // The next surface across a depth step from the region, within its ball. A region
+  // smaller than minAreaM2 is not a hand yet: it collects the fragments (surfaces smaller
+  // than minAreaM2) beside it at any step, e.g. fingers pointing at the camera, each a few
+  // cm in front of the next. Once large enough it takes fragments in front of it (more
+  // fingers) and surfaces behind it within kMaxOccluderStepM (the palm behind curled
+  // fingers) unless larger than a hand and forearm can be inside the ball (a wall, a
+  // table, the torso).
+  const bool small = g.sums.areaZ2 < g.minAreaZ2;
+  while (g.acrossHead < g.acrossTail) {
+    const auto index = static_cast<std::size_t>(g.acrossHead++);
+    const std::int32_t packed = across_[index];
+    const std::uint8_t side = acrossSide_[index];
+    if (visited_[cellOf(packed)] == g.stamp || (!small && side == kFarBehind)) continue;
+    g.partLimitZ2 = small || side == kInFront ? g.minAreaZ2 : g.maxPartAreaZ2;
+    g.trySide = side;
+    return packed;
+  }
+  return -1;
+}
+
+GrownRegion RegionGrower::finishGrowth(const Growth& g) {
   // Cell sums to pixel sums: u = originU + i * step.
+  const auto step = static_cast<float>(grid_.step);
   const auto ou = static_cast<float>(grid_.originU);
   const auto ov = static_cast<float>(grid_.originV);
+  const Growth::Sums& sums = g.sums;
   GrownRegion r;
-  r.cellCount = tail;
-  r.areaM2 = sums.areaZ2 * areaPerZ2;
+  r.cellCount = g.tail;
+  r.areaM2 = sums.areaZ2 * g.areaPerZ2;
   r.touchesEarlierRegion = sums.touches;
-  r.inFrontOfSurface = inFrontOfSurface;
-  r.nearestPoint = nearest;
+  r.inFrontOfSurface = g.inFrontOfSurface;
+  r.nearestPoint = g.nearest;
   r.pointSum = sums.pointSum;
-  r.pixelSum = Vec2(ou * static_cast<float>(tail) + step * sums.iSum,
-                    ov * static_cast<float>(tail) + step * sums.jSum);
+  r.pixelSum = Vec2(ou * static_cast<float>(g.tail) + step * sums.iSum,
+                    ov * static_cast<float>(g.tail) + step * sums.jSum);
   r.cutCount = sums.cutCount;
   r.cutPointSum = sums.cutPointSum;
   r.cutPixelSum = Vec2(ou * static_cast<float>(sums.cutCount) + step * sums.cutISum,
@@ -358,8 +408,8 @@ GrownRegion RegionGrower::grow(int seed, const DepthStepRule& rule, float radius
   r.maxI = sums.maxI;
   r.minJ = sums.minJ;
   r.maxJ = sums.maxJ;
-  regionEnd_ = tail;
-  cutBegin_ = cutTop;
+  regionEnd_ = g.tail;
+  cutBegin_ = g.cutTop;
   return r;
 }
 

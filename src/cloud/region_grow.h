@@ -120,6 +120,17 @@ class RegionGrower {
   const DepthGrid& grid() const { return grid_; }
 
  private:
+  // grow's running state (region_grow.cpp) and its stages: the seed's setup; flooding the
+  // current surface (within the step rule, occluders included) until the queue drains; a
+  // surface across a depth step, once flooded, kept or undone; the next such surface to try;
+  // the result.
+  struct Growth;
+  Growth beginGrowth(int seed, const DepthStepRule& rule, float radiusM, float minAreaM2);
+  void floodSurface(Growth& g);
+  bool settleTriedSurface(Growth& g);  // true: the region is in front of a surface, stop
+  std::int32_t nextSurfaceAcross(Growth& g);
+  GrownRegion finishGrowth(const Growth& g);
+
   DepthGrid grid_;
   Intrinsics k_;
   std::vector<std::uint8_t> labels_;   // (cells) CellLabel

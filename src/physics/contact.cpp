@@ -9,6 +9,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include "physics/rows.h"
 
@@ -121,6 +122,39 @@ Vec3 leastPenetrationAxis(const ConvexShape& a, const Pose& poseA, const ConvexS
   return best;
 }
 
+// Four of more than four clipped points that keep the manifold's area: the deepest, the
+// farthest from it, and the two spanning the largest areas on either side of that diagonal.
+void keepFour(std::span<const ManifoldPoint> candidates, const Vec3& refNormal,
+              ManifoldPoint* points) {
+  auto pick = [&](auto score) {
+    std::size_t best = 0;
+    float bestScore = -std::numeric_limits<float>::infinity();
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      const float sc = score(candidates[i].position);
+      if (sc > bestScore) {
+        bestScore = sc;
+        best = i;
+      }
+    }
+    return candidates[best];
+  };
+  std::size_t deepest = 0;
+  for (std::size_t i = 1; i < candidates.size(); ++i) {
+    if (candidates[i].separation < candidates[deepest].separation) deepest = i;
+  }
+  const ManifoldPoint p0 = candidates[deepest];
+  const ManifoldPoint p1 = pick([&](const Vec3& p) { return (p - p0.position).squaredNorm(); });
+  const Vec3 diag = p1.position - p0.position;
+  const ManifoldPoint p2 =
+      pick([&](const Vec3& p) { return refNormal.dot(diag.cross(p - p0.position)); });
+  const ManifoldPoint p3 =
+      pick([&](const Vec3& p) { return -refNormal.dot(diag.cross(p - p0.position)); });
+  points[0] = p0;
+  points[1] = p1;
+  points[2] = p2;
+  points[3] = p3;
+}
+
 }  // namespace
 
 int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b, const Pose& poseB,
@@ -211,37 +245,8 @@ int collideConvex(const ConvexShape& a, const Pose& poseA, const ConvexShape& b,
     for (int i = 0; i < candidateCount; ++i) points[i] = candidates[static_cast<std::size_t>(i)];
     return candidateCount;
   }
-  // Keep 4: the deepest, the farthest from it, and the two spanning the largest areas on
-  // either side of that diagonal.
-  auto pick = [&](auto score) {
-    int best = 0;
-    float bestScore = -std::numeric_limits<float>::infinity();
-    for (int i = 0; i < candidateCount; ++i) {
-      const float sc = score(candidates[static_cast<std::size_t>(i)].position);
-      if (sc > bestScore) {
-        bestScore = sc;
-        best = i;
-      }
-    }
-    return candidates[static_cast<std::size_t>(best)];
-  };
-  int deepest = 0;
-  for (int i = 1; i < candidateCount; ++i) {
-    if (candidates[static_cast<std::size_t>(i)].separation <
-        candidates[static_cast<std::size_t>(deepest)].separation)
-      deepest = i;
-  }
-  const ManifoldPoint p0 = candidates[static_cast<std::size_t>(deepest)];
-  const ManifoldPoint p1 = pick([&](const Vec3& p) { return (p - p0.position).squaredNorm(); });
-  const Vec3 diag = p1.position - p0.position;
-  const ManifoldPoint p2 =
-      pick([&](const Vec3& p) { return refNormal.dot(diag.cross(p - p0.position)); });
-  const ManifoldPoint p3 =
-      pick([&](const Vec3& p) { return -refNormal.dot(diag.cross(p - p0.position)); });
-  points[0] = p0;
-  points[1] = p1;
-  points[2] = p2;
-  points[3] = p3;
+  keepFour(std::span(candidates.data(), static_cast<std::size_t>(candidateCount)), refNormal,
+           points);
   return 4;
 }
 

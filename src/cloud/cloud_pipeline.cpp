@@ -85,12 +85,13 @@ struct CloudPipeline::Impl {
   cloud::RegionGrower fineGrower;
   cloud::LimbEndFinder limbEnd;
   cloud::SupportPlaneFinder planeFinder;
-  std::vector<float> coarseDepth;           // (coarse height x coarse width), m
-  std::vector<std::uint8_t> coarseOnPlane;  // (coarse cells) 1: a support plane's sample
-  std::vector<std::uint8_t> coarseNear;     // coarse labels dilated by one cell
-  std::vector<int> boxColumnCell;           // (box width) coarse column of each box column
-  std::vector<int> boxRowCell;              // (box height) coarse row of each box row
-  std::vector<Vec2> hullPoints;             // row extremes of the segment, normalised image plane
+  std::vector<float> coarseDepth;  // (coarse height x coarse width), m
+  // (coarse cells) 1: a support plane's sample; empty when this frame left out no plane
+  std::vector<std::uint8_t> coarseOnPlane;
+  std::vector<std::uint8_t> coarseNear;  // coarse labels dilated by one cell
+  std::vector<int> boxColumnCell;        // (box width) coarse column of each box column
+  std::vector<int> boxRowCell;           // (box height) coarse row of each box row
+  std::vector<Vec2> hullPoints;          // row extremes of the segment, normalised image plane
   // The segmentation samples of the box (every working sample or every other one), m, when
   // they differ from the working samples: subsampled, or support planes left out (segmentFine).
   std::vector<float> segmentDepth;
@@ -403,6 +404,9 @@ void CloudPipeline::Impl::leaveOutSupportPlanes(DepthGrid& grid, CloudFrame& out
   const SupportPlaneConfig& c = config.segmentation.supportPlanes;
   Segment& segment = out.segment;
   segment.supportPlaneCount = planeFinder.find(grid, k, c, segment.supportPlanes);
+  // Empty when no plane was left out (findLimbEnd then has no plane contacts to look for).
+  coarseOnPlane.clear();
+  if (segment.supportPlaneCount == 0) return;
   coarseOnPlane.assign(coarseDepth.size(), 0);
   for (int p = 0; p < segment.supportPlaneCount; ++p) {
     cloud::removePlaneSamples(segment.supportPlanes[static_cast<std::size_t>(p)], c.bandM, k,

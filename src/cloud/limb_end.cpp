@@ -15,6 +15,17 @@ enum CellState : std::uint8_t { kUnseen = 0, kSurface = 1, kAttachment = 2 };
 // comes too near to be measured. Silhouette edges (the surface turning away) and level holes
 // are not cuts.
 constexpr float kNearCutSlope = 0.5f;
+
+// Whether neighbouring samples at depths za and zb (m), `spacing` apart per m of depth, lie on
+// one surface. One rule both ways (symmetric), so the surface explored is the graph searched.
+bool joined(const DepthStepRule& rule, float za, float zb, float spacing) {
+  return std::fabs(za - zb) <= maxDepthStep(rule, std::max(za, zb), spacing);
+}
+
+// Cells are queued as packed coordinates (j << 16 | i): no division per cell.
+std::int32_t pack(int i, int j) {
+  return (j << 16) | i;
+}
 }  // namespace
 
 void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
@@ -42,10 +53,6 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
   const auto step = static_cast<float>(grid.step);
   const float spacingX = step / k.fx;
   const float spacingY = step / k.fy;
-  // One rule both ways (symmetric), so the surface explored is the graph searched.
-  const auto joined = [&](float za, float zb, float spacing) {
-    return std::fabs(za - zb) <= maxDepthStep(rule, std::max(za, zb), spacing);
-  };
   const auto atBorder = [&](int i, int j) {
     if (borderMarginPixels <= 0) return i == 0 || j == 0 || i + 1 == w || j + 1 == h;
     const int u = grid.originU + i * grid.step;
@@ -72,8 +79,6 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
   const int seedJ = seed / w;
   const Vec3 centre = point(seedI, seedJ, depth[seed]);
   const float radius2 = limbRadiusM * limbRadiusM;
-  // Cells are queued as packed coordinates (j << 16 | i): no division per cell.
-  const auto pack = [](int i, int j) { return (j << 16) | i; };
 
   // 1. The connected surface inside the ball; attachments where it leaves the ball or
   //    the image.
@@ -97,7 +102,7 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
           leaves = true;  // the limb comes nearer than the sensor's range
         return;
       }
-      if (state_[un] != kUnseen || !joined(z, depth[n], spacing)) return;
+      if (state_[un] != kUnseen || !joined(rule, z, depth[n], spacing)) return;
       if ((point(ni, nj, depth[n]) - centre).squaredNorm() > radius2) {
         leaves = true;
         return;
@@ -143,10 +148,6 @@ void LimbEndFinder::stepFromAttachments(const DepthGrid& grid, const Intrinsics&
   const auto step = static_cast<float>(grid.step);
   const float spacingX = step / k.fx;
   const float spacingY = step / k.fy;
-  const auto joined = [&](float za, float zb, float spacing) {
-    return std::fabs(za - zb) <= maxDepthStep(rule, std::max(za, zb), spacing);
-  };
-  const auto pack = [](int i, int j) { return (j << 16) | i; };
   for (std::size_t q = 0; q < queue_.size(); ++q) {
     const int i = queue_[q] & 0xffff;
     const int j = queue_[q] >> 16;
@@ -155,7 +156,7 @@ void LimbEndFinder::stepFromAttachments(const DepthGrid& grid, const Intrinsics&
     const int next = steps_[static_cast<std::size_t>(c)] + 1;
     const auto relax = [&](int n, int ni, int nj, float spacing) {
       const auto un = static_cast<std::size_t>(n);
-      if (state_[un] == kUnseen || steps_[un] >= 0 || !joined(z, depth[n], spacing)) return;
+      if (state_[un] == kUnseen || steps_[un] >= 0 || !joined(rule, z, depth[n], spacing)) return;
       steps_[un] = next;
       queue_.push_back(pack(ni, nj));
     };

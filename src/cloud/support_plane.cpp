@@ -39,20 +39,20 @@ void SupportPlaneFinder::reserve(std::size_t cells) {
   pointOfCell_.reserve(cells);
 }
 
-float SupportPlaneFinder::inlierArea(const Vec3& n, float offset, float bandM,
+float SupportPlaneFinder::inlierArea(const SupportPlane& plane, float bandM,
                                      std::size_t every) const {
   float area = 0.0f;
   for (std::size_t i = 0; i < points_.size(); i += every) {
-    if (std::abs(n.dot(points_[i]) - offset) <= bandM) area += area_[i];
+    if (onPlane(plane, points_[i], bandM)) area += area_[i];
   }
   return area * static_cast<float>(every);
 }
 
-bool SupportPlaneFinder::refit(Candidate& c, float bandM) const {
+bool SupportPlaneFinder::refit(SupportPlane& plane, float bandM) const {
   Vec3 mean = Vec3::Zero();
   float weight = 0.0f;
   for (std::size_t i = 0; i < points_.size(); ++i) {
-    if (area_[i] > 0.0f && std::abs(c.normal.dot(points_[i]) - c.offset) <= bandM) {
+    if (area_[i] > 0.0f && onPlane(plane, points_[i], bandM)) {
       mean += area_[i] * points_[i];
       weight += area_[i];
     }
@@ -61,7 +61,7 @@ bool SupportPlaneFinder::refit(Candidate& c, float bandM) const {
   mean /= weight;
   Eigen::Matrix3f covariance = Eigen::Matrix3f::Zero();
   for (std::size_t i = 0; i < points_.size(); ++i) {
-    if (area_[i] > 0.0f && std::abs(c.normal.dot(points_[i]) - c.offset) <= bandM) {
+    if (area_[i] > 0.0f && onPlane(plane, points_[i], bandM)) {
       const Vec3 d = points_[i] - mean;
       covariance += area_[i] * d * d.transpose();
     }
@@ -73,12 +73,12 @@ bool SupportPlaneFinder::refit(Candidate& c, float bandM) const {
   n.normalize();
   float offset = n.dot(mean);
   faceCamera(n, offset);
-  c.normal = n;
-  c.offset = offset;
+  plane.normal = n;
+  plane.offset = offset;
   return true;
 }
 
-bool SupportPlaneFinder::hypothesis(const DepthGrid& grid, Candidate& c) {
+bool SupportPlaneFinder::hypothesis(const DepthGrid& grid, SupportPlane& plane) {
   const auto count = static_cast<std::uint32_t>(points_.size());
   for (int attempt = 0; attempt < kSampleTries; ++attempt) {
     const std::uint32_t first = nextRandom(random_) % count;
@@ -102,17 +102,17 @@ bool SupportPlaneFinder::hypothesis(const DepthGrid& grid, Candidate& c) {
                        .cross(points_[static_cast<std::size_t>(others[1])] - a);
     const float twiceArea = n.norm();
     if (twiceArea < 2.0f * kMinTriangleAreaM2) continue;
-    c.normal = n / twiceArea;
-    c.offset = c.normal.dot(a);
-    faceCamera(c.normal, c.offset);
+    plane.normal = n / twiceArea;
+    plane.offset = plane.normal.dot(a);
+    faceCamera(plane.normal, plane.offset);
     return true;
   }
   return false;
 }
 
-void SupportPlaneFinder::removeInliers(const Candidate& c, float bandM) {
+void SupportPlaneFinder::removeInliers(const SupportPlane& plane, float bandM) {
   for (std::size_t i = 0; i < points_.size(); ++i) {
-    if (std::abs(c.normal.dot(points_[i]) - c.offset) <= bandM) area_[i] = 0.0f;
+    if (onPlane(plane, points_[i], bandM)) area_[i] = 0.0f;
   }
 }
 
@@ -143,27 +143,25 @@ int SupportPlaneFinder::find(const DepthGrid& grid, const Intrinsics& k,
   }
   const std::size_t every = std::max<std::size_t>(1, points_.size() / kScoredSamples);
   for (; found < wanted; ++found) {
-    Candidate best;
+    SupportPlane best;
+    best.areaM2 = -1.0f;  // none yet
     // Last frame's planes first: a table stays where it is.
     for (int p = 0; p < previousCount_; ++p) {
-      const Candidate c{
-          previous_[static_cast<std::size_t>(p)].normal,
-          previous_[static_cast<std::size_t>(p)].offset,
-          inlierArea(previous_[static_cast<std::size_t>(p)].normal,
-                     previous_[static_cast<std::size_t>(p)].offset, config.bandM, every)};
-      if (c.area > best.area) best = c;
+      SupportPlane c = previous_[static_cast<std::size_t>(p)];
+      c.areaM2 = inlierArea(c, config.bandM, every);
+      if (c.areaM2 > best.areaM2) best = c;
     }
     for (int h = 0; h < config.hypotheses; ++h) {
-      Candidate c;
+      SupportPlane c;
       if (!hypothesis(grid, c)) continue;
-      c.area = inlierArea(c.normal, c.offset, config.bandM, every);
-      if (c.area > best.area) best = c;
+      c.areaM2 = inlierArea(c, config.bandM, every);
+      if (c.areaM2 > best.areaM2) best = c;
     }
     // A plane too small on the subsample is too small: spare the full passes.
-    if (best.area < 0.5f * config.minAreaM2 || !refit(best, config.bandM)) break;
-    best.area = inlierArea(best.normal, best.offset, config.bandM, 1);
-    if (best.area < config.minAreaM2) break;
-    out[static_cast<std::size_t>(found)] = SupportPlane{best.normal, best.offset, best.area};
+    if (best.areaM2 < 0.5f * config.minAreaM2 || !refit(best, config.bandM)) break;
+    best.areaM2 = inlierArea(best, config.bandM, 1);
+    if (best.areaM2 < config.minAreaM2) break;
+    out[static_cast<std::size_t>(found)] = best;
     removeInliers(best, config.bandM);
   }
   previousCount_ = std::min(found, static_cast<int>(previous_.size()));

@@ -26,19 +26,15 @@ class SupportPlaneFinder {
            std::span<SupportPlane> out);
 
  private:
-  struct Candidate {
-    Vec3 normal = Vec3::Zero();
-    float offset = 0.0f;
-    float area = -1.0f;  // m^2
-  };
   // Area (m^2, as seen) of the remaining samples within bandM of the plane, visiting every
   // `every`-th one.
-  float inlierArea(const Vec3& n, float offset, float bandM, std::size_t every) const;
-  // Least-squares plane through the remaining samples within bandM of c; false if degenerate.
-  bool refit(Candidate& c, float bandM) const;
-  // A plane through three remaining samples near each other, or false.
-  bool hypothesis(const DepthGrid& grid, Candidate& c);
-  void removeInliers(const Candidate& c, float bandM);
+  float inlierArea(const SupportPlane& plane, float bandM, std::size_t every) const;
+  // Least-squares plane through the remaining samples within bandM of `plane`, which it
+  // replaces (its area is left as it was); false if degenerate.
+  bool refit(SupportPlane& plane, float bandM) const;
+  // A plane through three remaining samples near each other (its area unset), or false.
+  bool hypothesis(const DepthGrid& grid, SupportPlane& plane);
+  void removeInliers(const SupportPlane& plane, float bandM);
 
   std::vector<Vec3> points_;               // the grid's samples with depth, m
   std::vector<float> area_;                // each sample's seen area, m^2 (0: removed)

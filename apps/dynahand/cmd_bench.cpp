@@ -32,6 +32,7 @@ struct BenchOptions {
   bool quick = false;
   bool noDetector = false;  // every item without the learned detector (an ablation)
   std::string rows;         // only the items whose row label contains this (empty: all)
+  bool items = false;       // one line per item after each table
   // --suite soak
   double minutes = 0.0;   // default: 60 (track), 15 (--serve)
   std::string soakInput;  // default: soak.h's
@@ -149,6 +150,19 @@ Result<SuiteRun> runItems(const char* name, const std::vector<eval::SuiteItem>& 
   return run;
 }
 
+// --items: one line per item (its row, clip, mean / p95 error and share within 30 mm), to
+// see which clips or segments a row's figures come from.
+void printItems(const SuiteRun& run) {
+  std::printf("\n%-48s %-28s %8s %8s %7s\n", "row", "item", "mean mm", "p95 mm", "<=30mm");
+  for (const eval::SuiteItemResult& r : run.results) {
+    const eval::KeypointMetrics& m = r.metrics;
+    const double within =
+        m.successFraction.size() > 2 ? 100.0 * m.successFraction[2] : 0.0;  // 30 mm
+    std::printf("%-48s %-28s %8.1f %8.1f %6.1f%%\n", eval::rowLabel(r.item).c_str(),
+                r.item.clip.c_str(), m.meanMm, m.p95Mm, within);
+  }
+}
+
 std::string runLine(const SuiteRun& run, int threads) {
   return fmt::format(
       "Items: {}, frames: {}, wall time {} s on {} thread(s){}", run.results.size(),
@@ -230,6 +244,7 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
     if (!run) throw std::runtime_error(run.message());
     const auto rows = eval::summarizeSuite(run->results);
     std::printf("\n%s", eval::motionTableText(rows).c_str());
+    if (o.items) printItems(*run);
     std::printf("\n%zu items in %.0f s wall time on %d thread(s)\n\n", run->results.size(),
                 run->wallS, o.threads);
     body += "## Motion suite\n\n" + std::string(kMotionIntro) + "\n\n- " + runLine(*run, o.threads);
@@ -248,6 +263,7 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
     if (!run) throw std::runtime_error(run.message());
     const auto rows = eval::summarizeSuite(run->results);
     std::printf("\n%s", eval::suiteTableText(rows).c_str());
+    if (o.items) printItems(*run);
     std::printf("\n%zu items in %.0f s wall time on %d thread(s)\n", run->results.size(),
                 run->wallS, o.threads);
     body += "## Standard suite (regression rows)\n\n" + std::string(kStandardIntro) + "\n\n- " +
@@ -300,6 +316,9 @@ const CommandRegistration kBenchCommand{Command{
       sub.add_option("--rows", o->rows,
                      "only the items of the rows whose name contains TEXT (e.g. 'held objects', "
                      "'tof / head'); with --suite all, each suite must have such rows");
+      sub.add_flag("--items", o->items,
+                   "after each table, one line per item: its row, clip or segment, mean and "
+                   "p95 error and share of frames with every joint within 30 mm");
       sub.add_option("--minutes", o->minutes,
                      "soak: how long (default 60; 15 with --serve; fractions allowed)")
           ->check(CLI::Range(0.01, 10000.0));
@@ -335,6 +354,7 @@ const CommandRegistration kBenchCommand{Command{
         if (o->threads > 1) line += " --threads " + std::to_string(o->threads);
         if (o->noDetector) line += " --no-detector";
         if (!o->rows.empty()) line += " --rows '" + o->rows + "'";
+        if (o->items) line += " --items";
         if (o->minutes > 0.0) line += fmt::format(" --minutes {}", o->minutes);
         if (!o->soakInput.empty()) line += " --soak-input " + o->soakInput;
         if (o->serve) line += " --serve";

@@ -68,6 +68,12 @@ struct DetectorSettings {
   /// disagreeFrames frames in a row, the detector-fit simulation's hand replaces the winner.
   float disagreeDistanceM = 0.035f;
   int disagreeFrames = 4;  ///< frames in a row beyond disagreeDistanceM (see above)
+  /// The winner of a frame's simulations is the one with the least error plus this times the
+  /// mean distance (m) of its keypoints from the detector's confident ones (dimensionless;
+  /// 0: the paper's error metric alone). Joints hidden from the camera (fingers curled behind
+  /// the back of the hand) cost the metric nothing wherever they are; the detector's view of
+  /// them breaks the tie.
+  float selectionWeight = 1.0f;
   /// One hand whose segment is a limb attached to the body (CloudFrame::segment.limbEndFound):
   /// the crop of a hand not found last frame is centred on the mean of the hand's points
   /// within limbEndRadius x the model hand's length of the limb's free end, not on the

@@ -88,7 +88,8 @@ HandTracker::HandTracker(const model::ArticulatedModel& model, model::Side side,
                                                  {},
                                                  {},
                                                  {},
-                                                 {}}));
+                                                 {},
+                                                 0.0f}));
     physics::World& world = lanes_.back()->rig.world();
     world.reserveRows(rows);
     world.settings().iterations = settings_.iterations;
@@ -181,6 +182,14 @@ bool HandTracker::fitDetectorPose(const model::JointAngles* warmStart) {
     }
   }
   return haveDetectorPose_;
+}
+
+float HandTracker::agreementTerm(const Lane& lane) {
+  const float weight = settings_.detector.selectionWeight;
+  if (weight <= 0.0f || keypoints_ == nullptr) return 0.0f;
+  lane.rig.readPose(pose_);
+  scratchKeypoints_ = model::keypoints21(*model_, pose_);
+  return weight * detectorDistance(scratchKeypoints_);
 }
 
 float HandTracker::detectorDistance(const Keypoints21& keypoints) const {
@@ -291,10 +300,12 @@ void HandTracker::evaluateUntilBeaten(const HandFrame& frame) {
     const std::size_t index = k == 0 ? first : (k <= first ? k - 1 : k);
     Lane& lane = *lanes_[index];
     if (!lane.candidate.ran) continue;
+    const float agreement = agreementTerm(lane);
     if (evaluate(lane.simulator, lane.rig, frame, metricHints(lane.simulator, lane.metricHints),
-                 lane.posed, lane.error, best, metricOrder_))
-      best = std::min(best, lane.error.total);
+                 lane.posed, lane.error, best - agreement, metricOrder_))
+      best = std::min(best, lane.error.total + agreement);
     lane.candidate.error = lane.error.total;
+    lane.score = lane.error.total + agreement;
     if (metricOrder_.empty()) {
       const auto& distance = lane.error.pointDistance;
       metricOrder_.resize(distance.size());
@@ -437,6 +448,7 @@ void HandTracker::finishLane(Lane& lane, const HandFrame& frame) {
   evaluate(lane.simulator, lane.rig, frame, metricHints(lane.simulator, lane.metricHints),
            lane.posed, lane.error);
   lane.candidate.error = lane.error.total;
+  lane.score = lane.error.total + agreementTerm(lane);
   lane.rig.readPose(lane.candidate.pose);
 }
 
@@ -474,13 +486,15 @@ void HandTracker::runLanes(const HandFrame& frame, const FrameStart& start) {
 
 void HandTracker::pickWinner(const HandFrame& frame, HandResult& out) {
   // The winner, in strategy order (ties to the earlier strategy).
+  float bestScore = std::numeric_limits<float>::infinity();
   float bestError = std::numeric_limits<float>::infinity();
   StrategyKind bestKind = StrategyKind::Normal;
   const Lane* best = nullptr;
   lastWinner_ = -1;
   for (std::size_t k = 0; k < lanes_.size(); ++k) {
     const Lane& lane = *lanes_[k];
-    if (lane.candidate.ran && lane.candidate.error < bestError) {
+    if (lane.candidate.ran && lane.score < bestScore) {
+      bestScore = lane.score;
       bestError = lane.candidate.error;
       bestKind = lane.candidate.kind;
       best = &lane;

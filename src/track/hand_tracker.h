@@ -114,7 +114,13 @@ class HandTracker {
     ErrorBreakdown error;
     Candidate candidate;
     std::vector<int> metricHints;  // scratch: its simulator's bodies over all points
+    // What the winner is chosen by: candidate.error plus the detector-agreement term
+    // (DetectorSettings::selectionWeight), m.
+    float score = 0.0f;
   };
+  // DetectorSettings::selectionWeight x the mean distance (m) of the lane's keypoints from the
+  // detector's confident ones; 0 without a detection in use.
+  float agreementTerm(const Lane& lane);
   // Loss test after the winner is chosen: counts frames in a row the winner disagrees with
   // the detector; at DetectorSettings::disagreeFrames the detector-fit lane replaces it.
   // Returns the lane to keep.

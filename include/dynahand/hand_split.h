@@ -1,10 +1,10 @@
 /// @file
 /// Two hands from one segmented cloud (paper: "Tracking of Multiple Hands"): k-means
 /// with k = 2; the cluster on the user's left is the left hand; when the two clusters
-/// are too close (or one is too small) they are merged into one cluster, tracked as
-/// the right hand. A small stateful object: while two hands stay visible, k-means starts
-/// from last frame's centroids and each cluster keeps its label, so hands keep their
-/// identity when they cross.
+/// are too close, one is too small, or they are one limb cut lengthwise (a hand and its
+/// forearm) they are merged into one cluster, tracked as the right hand. A small stateful object:
+/// while two hands stay visible, k-means starts from last frame's centroids and each cluster keeps
+/// its label, so hands keep their identity when they cross.
 #pragma once
 
 #include <array>
@@ -27,10 +27,17 @@ enum class CameraPlacement : std::uint8_t {
 
 /// Settings of a HandSplitter.
 struct HandSplitConfig {
-  /// Clusters whose centroids are closer than this (m) are one hand. Two hands held
-  /// side by side have centroids >= ~0.12 m apart; halves of one hand plus a forearm
-  /// stub are closer.
-  float mergeDistanceM = 0.12f;
+  /// Clusters whose centroids are closer than this (m) are one hand: halves of one hand
+  /// seen from the desk. Two hands touching side by side have centroids about 0.1-0.14 m
+  /// apart, a hand and its own forearm cut apart by k-means 0.1-0.17 m.
+  float mergeDistanceM = 0.09f;
+  /// Clusters farther apart than this (m) are two hands whatever their shape.
+  float apartDistanceM = 0.2f;
+  /// Between the two distances, the clusters are two hands only when neither one's longest
+  /// axis lies along the line between their centroids (|cosine| below this): one limb cut in
+  /// two (a hand and its forearm) has both along that line, two hands side by side lie
+  /// along their arms, across it.
+  float maxAlongLimb = 0.6f;
   int minPointsPerHand = 30;  ///< a smaller cluster is noise or a fingertip: merge
   int maxIterations = 20;     ///< k-means (Lloyd) iterations; it stops earlier when stable
   CameraPlacement placement = CameraPlacement::kFacingUser;  ///< which side is the left hand
@@ -67,6 +74,11 @@ class HandSplitter {
   const HandSplitConfig& config() const { return config_; }  ///< the settings
 
  private:
+  // Lloyd's k-means from `centre` (updated): labels (kLeft = cluster 0) and counts.
+  void cluster(std::span<const Vec3> points, std::array<Vec3, 2>& centre, std::vector<Hand>& label,
+               std::array<int, 2>& count) const;
+  bool oneLimb(std::span<const Vec3> points, std::span<const Hand> label,
+               const std::array<Vec3, 2>& centre) const;
   HandSplitConfig config_;
   bool hadTwoHands_ = false;
   std::array<Vec3, 2> previousCentroid_ = {Vec3::Zero(), Vec3::Zero()};  ///< [left, right]

@@ -254,6 +254,18 @@ std::vector<ClipDefinition> makeClips() {
     c.push_back({{"two-hands", "right hand opening and closing while the left waves", 2.6f, 2},
                  {right, left}});
   }
+  {
+    // Side by side with the thumbs and index fingers touching: 5 cm to the ulnar side each
+    // (the thumbs reach past the index knuckles), so the two hands make one connected surface.
+    std::vector<Key> right = openCloseTrack(), left = {key(0.0f, relaxed())};
+    for (Key& k : right) k.offset.x() -= 0.065f;
+    for (Key& k : left) k.offset.x() -= 0.065f;
+    c.push_back({{"hands-touching",
+                  "two hands side by side, thumbs and index fingers touching, the right one "
+                  "opening and closing",
+                  2.6f, 2},
+                 {right, left}});
+  }
   return c;
 }
 

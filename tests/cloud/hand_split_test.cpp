@@ -8,8 +8,10 @@
 namespace dynahand {
 namespace {
 
-// A deterministic blob of `count` points within +-half of centre on each axis.
-void addBlob(std::vector<Vec3>& points, const Vec3& centre, float half, int count) {
+// A deterministic blob of `count` points within +-half of centre on each axis (+-half x
+// `tall` along y: a hand and forearm hanging into the view).
+void addBlob(std::vector<Vec3>& points, const Vec3& centre, float half, int count,
+             float tall = 1.0f) {
   std::uint32_t state = 12345u + static_cast<std::uint32_t>(points.size());
   const auto next = [&state] {
     state = state * 1664525u + 1013904223u;
@@ -19,7 +21,7 @@ void addBlob(std::vector<Vec3>& points, const Vec3& centre, float half, int coun
     const float x = next();
     const float y = next();
     const float z = next();
-    points.push_back(centre + Vec3(x, y, z) * half);
+    points.push_back(centre + Vec3(x, tall * y, z) * half);
   }
 }
 
@@ -64,6 +66,32 @@ TEST(HandSplit, MergesBlobsThatAreTooCloseIntoTheRightHand) {
   for (Hand h : split.label) EXPECT_EQ(h, Hand::kRight);
 }
 
+// One hand with its forearm, hanging into the view: k-means cuts it across the wrist into two
+// clusters 0.14 m apart, each elongated along the line between them. One hand.
+TEST(HandSplit, AHandAndItsForearmCutApartAreOneHand) {
+  std::vector<Vec3> points;
+  addBlob(points, Vec3(0.0f, -0.07f, 0.5f), 0.03f, 200, 2.0f);  // hand
+  addBlob(points, Vec3(0.0f, 0.07f, 0.5f), 0.025f, 200, 2.5f);  // forearm
+  HandSplitter splitter;
+  HandSplit split;
+  splitter.split(points, split);
+  EXPECT_EQ(split.handCount, 1);
+}
+
+// Two hands side by side, touching, each elongated along its arm: their centroids are 0.11 m
+// apart, nearer than a hand's from its forearm's above. Two hands.
+TEST(HandSplit, TwoHandsSideBySideAreTwoHands) {
+  std::vector<Vec3> points;
+  addBlob(points, Vec3(-0.055f, 0.0f, 0.5f), 0.035f, 200, 3.0f);
+  addBlob(points, Vec3(0.055f, 0.0f, 0.5f), 0.035f, 200, 3.0f);
+  HandSplitter splitter;
+  HandSplit split;
+  splitter.split(points, split);
+  ASSERT_EQ(split.handCount, 2);
+  EXPECT_EQ(split[Hand::kLeft].pointCount, 200);
+  EXPECT_EQ(split[Hand::kRight].pointCount, 200);
+}
+
 TEST(HandSplit, TinySecondClusterIsMerged) {
   std::vector<Vec3> points;
   addBlob(points, Vec3(0.0f, 0.0f, 0.5f), 0.04f, 300);
@@ -87,16 +115,17 @@ TEST(HandSplit, EmptyCloudHasNoHands) {
 
 TEST(HandSplit, IdentityIsKeptWhenHandsCross) {
   // Hand A starts on the image left (the user's right hand when facing the camera) at
-  // 0.5 m; hand B on the image right, 0.7 m away. They swap sides over 16 frames,
-  // passing at different depths, so they never merge.
+  // 0.5 m; hand B on the image right, 0.7 m away, each with its arm along the image's
+  // vertical. They swap sides over 16 frames, passing at different depths, so they never
+  // merge.
   HandSplitter splitter;
   HandSplit split;
   for (int frame = 0; frame <= 16; ++frame) {
     const float t = static_cast<float>(frame) / 16.0f;
     const float ax = -0.15f + 0.3f * t;
     std::vector<Vec3> points;
-    addBlob(points, Vec3(ax, 0.0f, 0.5f), 0.03f, 120);   // A: points [0, 120)
-    addBlob(points, Vec3(-ax, 0.0f, 0.7f), 0.03f, 120);  // B: points [120, 240)
+    addBlob(points, Vec3(ax, 0.0f, 0.5f), 0.03f, 120, 3.0f);   // A: points [0, 120)
+    addBlob(points, Vec3(-ax, 0.0f, 0.7f), 0.03f, 120, 3.0f);  // B: points [120, 240)
     splitter.split(points, split);
     ASSERT_EQ(split.handCount, 2) << "frame " << frame;
     EXPECT_EQ(split.label[0], Hand::kRight) << "frame " << frame;
@@ -106,8 +135,8 @@ TEST(HandSplit, IdentityIsKeptWhenHandsCross) {
   // After a reset, labels follow the sides again: A is now on the image right.
   splitter.reset();
   std::vector<Vec3> points;
-  addBlob(points, Vec3(0.15f, 0.0f, 0.5f), 0.03f, 120);
-  addBlob(points, Vec3(-0.15f, 0.0f, 0.7f), 0.03f, 120);
+  addBlob(points, Vec3(0.15f, 0.0f, 0.5f), 0.03f, 120, 3.0f);
+  addBlob(points, Vec3(-0.15f, 0.0f, 0.7f), 0.03f, 120, 3.0f);
   splitter.split(points, split);
   EXPECT_EQ(split.label[0], Hand::kLeft);
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dynahand/cloud.h"
+#include "dynahand/hand_split.h"
 #include "dynahand/synth.h"
 #include "dynahand/synth_render.h"
 #include "test_support.h"
@@ -336,6 +337,55 @@ TEST(CloudSynthClips, ATableUnderTheHandStaysOutOfTheSegment) {
         }
       }
     }
+  }
+}
+
+// Two hands side by side with their thumbs touching (the hands-touching clip: one connected
+// surface), seen from the desk and from the head, split as the tracker splits them with two
+// hands (the second region searched 0.2 m deep, k-means): both hands found in every frame, each
+// cluster's points on its own hand. The centroids are 10-14 cm apart, no farther than a hand's
+// from its own forearm's, so distance alone merged them into one hand.
+TEST(CloudSynthClips, TwoTouchingHandsAreSplitIntoTheirOwnPoints) {
+  for (const bool head : {false, true}) {
+    SCOPED_TRACE(head ? "head-mounted" : "desk");
+    synth::SynthOptions options;
+    options.clip = "hands-touching";
+    options.profile = "tof";
+    options.frameCount = 60;
+    options.scene.placement =
+        head ? synth::CameraPlacement::HeadMounted : synth::CameraPlacement::DeskFacing;
+    Result<synth::SyntheticSequence> seq = synth::SyntheticSequence::create(options);
+    ASSERT_TRUE(seq.ok()) << seq.error().message;
+    CloudConfig config;
+    config.segmentation.sensorMinRangeM = seq->profile().minRange;
+    config.segmentation.secondRegionDepthBandM = 0.2f;  // as the tracker with two hands
+    CloudPipeline pipeline(seq->intrinsics(), config);
+    HandSplitConfig splitConfig;
+    splitConfig.placement = head ? CameraPlacement::kBehindUser : CameraPlacement::kFacingUser;
+    HandSplitter splitter(splitConfig);
+    CloudFrame out;
+    HandSplit split;
+    int bothFound = 0;
+    long own = 0, all = 0;
+    for (int i = 0; i < seq->frameCount(); ++i) {
+      const synth::SyntheticFrame& frame = seq->frame(i);
+      ASSERT_TRUE(pipeline.process(frame.depth, out).ok());
+      splitter.split(out.points, split);
+      bothFound += split.handCount == 2;
+      if (split.handCount != 2) continue;
+      const std::span<const synth::PixelLabel> labels = seq->labels();
+      for (std::size_t p = 0; p < out.points.size(); ++p) {
+        // The clip's hand 0 is the right hand, hand 1 the left.
+        const synth::PixelLabel label = labels[static_cast<std::size_t>(out.pointPixels[p])];
+        const synth::PixelLabel expected =
+            split.label[p] == Hand::kRight ? synth::PixelLabel::Hand0 : synth::PixelLabel::Hand1;
+        own += label == expected;
+        ++all;
+      }
+    }
+    EXPECT_GE(bothFound, seq->frameCount() - 2);
+    ASSERT_GT(all, 0);
+    EXPECT_GE(static_cast<double>(own) / static_cast<double>(all), 0.9);
   }
 }
 

@@ -74,6 +74,10 @@ struct DetectorSettings {
   /// the back of the hand) cost the metric nothing wherever they are; the detector's view of
   /// them breaks the tie.
   float selectionWeight = 1.0f;
+  /// Sample points farther than this (m) from the detected skeleton (its bones as segments,
+  /// and the forearm beyond the wrist) pull no bone and are not scored by the error metric:
+  /// an object held in the hand. 0: every point is the hand's.
+  float objectDistanceM = 0.03f;
   /// One hand whose segment is a limb attached to the body (CloudFrame::segment.limbEndFound):
   /// the crop of a hand not found last frame is centred on the mean of the hand's points
   /// within limbEndRadius x the model hand's length of the limb's free end, not on the

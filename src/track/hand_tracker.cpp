@@ -23,6 +23,7 @@ constexpr float kOffHandTipPenaltyM = 0.05f;  // acquisition: per fingertip over
 // a fit from scratch costs ~10x more. Farther (a flipped or lost hand) the fit starts afresh.
 constexpr float kWarmFitDistanceM = 0.03f;
 constexpr int kWarmFitIterations = 8;
+constexpr float kForearmReachM = 0.15f;  // the forearm kept beyond the detected wrist, m
 
 // The hand's own world (acquisition steps it); the simulations' copies take the tracking
 // sweeps (HandTracker's constructor).
@@ -184,6 +185,40 @@ bool HandTracker::fitDetectorPose(const model::JointAngles* warmStart) {
   return haveDetectorPose_;
 }
 
+std::span<const Vec3> HandTracker::pointsOnTheDetectedHand(std::span<const Vec3> points) {
+  const float reach = settings_.detector.objectDistanceM;
+  if (reach <= 0.0f || keypoints_ == nullptr) return points;
+  // The detected skeleton: every bone from the wrist out, the knuckles joined, and the forearm
+  // beyond the wrist (the model's forearm body holds points there too).
+  static constexpr std::array<std::array<int, 2>, 24> kBones = {
+      {{0, 1},  {1, 2},   {2, 3},   {3, 4},   {0, 5},  {5, 6},   {6, 7},   {7, 8},
+       {0, 9},  {9, 10},  {10, 11}, {11, 12}, {0, 13}, {13, 14}, {14, 15}, {15, 16},
+       {0, 17}, {17, 18}, {18, 19}, {19, 20}, {1, 5},  {5, 9},   {9, 13},  {13, 17}}};
+  const Keypoints21& k = keypoints_->points;
+  std::array<Vec3, 25> from, to;
+  for (std::size_t b = 0; b < kBones.size(); ++b) {
+    from[b] = k[static_cast<std::size_t>(kBones[b][0])];
+    to[b] = k[static_cast<std::size_t>(kBones[b][1])];
+  }
+  from[24] = k[0];
+  to[24] = k[0] + kForearmReachM * (k[0] - k[9]).normalized();
+  const float reach2 = reach * reach;
+  handPoints_.clear();
+  for (const Vec3& p : points) {
+    bool near = false;
+    for (std::size_t b = 0; b < from.size() && !near; ++b) {
+      const Vec3 d = to[b] - from[b];
+      const float t =
+          std::clamp((p - from[b]).dot(d) / std::max(d.squaredNorm(), 1e-12f), 0.0f, 1.0f);
+      near = (from[b] + t * d - p).squaredNorm() <= reach2;
+    }
+    if (near) handPoints_.push_back(p);
+  }
+  // Most of the points off the detected hand: the detection, not the data, is wrong.
+  if (2 * handPoints_.size() < points.size()) return points;
+  return handPoints_;
+}
+
 float HandTracker::agreementTerm(const Lane& lane) {
   const float weight = settings_.detector.selectionWeight;
   if (weight <= 0.0f || keypoints_ == nullptr) return 0.0f;
@@ -341,29 +376,32 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     return;
   }
   prepareDetectorEvidence(frame);
+  // The points the simulations pull on and the metric scores: without a held object's.
+  HandFrame hand = frame;
+  hand.points = pointsOnTheDetectedHand(frame.points);
   if (!tracked_ || settings_.perFrame) {
-    acquire(frame, out);
+    acquire(hand, out);
   } else {
-    runStrategies(frame, out);
+    runStrategies(hand, out);
   }
   fillResult(out);
   out.detected = keypoints_ != nullptr;
-  if (frame.keypoints != nullptr && frame.keypoints->valid) {
-    out.detectorKeypoints21 = frame.keypoints->points;
-    out.detectorConfidence = frame.keypoints->confidence;
+  if (hand.keypoints != nullptr && hand.keypoints->valid) {
+    out.detectorKeypoints21 = hand.keypoints->points;
+    out.detectorConfidence = hand.keypoints->confidence;
   } else {
     out.detectorKeypoints21.fill(Vec3::Zero());
     out.detectorConfidence.fill(0.0f);
   }
   out.detectorDisagreement = keypoints_ != nullptr ? detectorDistance(out.keypoints21) : 0.0f;
   out.disagreeingFrames = disagreeFrames_;
-  if (out.tracked && frame.cloud != nullptr) {
+  if (out.tracked && hand.cloud != nullptr) {
     simulator_.pose(rig_, posed_);
     std::array<Vec3, 5> tips;
     for (std::size_t f = 0; f < 5; ++f) tips[f] = out.keypoints21[4 + 4 * f];
     // bestBreakdown_ was measured at exactly these poses: its point distances are this
     // pose's.
-    out.quality = measureFitQuality(posed_, bestBreakdown_.pointDistance, *frame.cloud,
+    out.quality = measureFitQuality(posed_, bestBreakdown_.pointDistance, *hand.cloud,
                                     rig_.anatomy().forearm, tips);
   } else {
     out.quality = FitQuality{};

@@ -121,6 +121,11 @@ class HandTracker {
   // DetectorSettings::selectionWeight x the mean distance (m) of the lane's keypoints from the
   // detector's confident ones; 0 without a detection in use.
   float agreementTerm(const Lane& lane);
+  // `points` without those farther than DetectorSettings::objectDistanceM from the detected
+  // skeleton (a held object's); all of them without a detection in use, or when that would
+  // leave fewer than half.
+  std::span<const Vec3> pointsOnTheDetectedHand(std::span<const Vec3> points);
+  std::vector<Vec3> handPoints_;  // pointsOnTheDetectedHand's result
   // Loss test after the winner is chosen: counts frames in a row the winner disagrees with
   // the detector; at DetectorSettings::disagreeFrames the detector-fit lane replaces it.
   // Returns the lane to keep.

@@ -3,8 +3,8 @@
 /// with k = 2; the cluster on the user's left is the left hand; when the two clusters
 /// are too close, one is too small, or they are one limb cut lengthwise (a hand and its
 /// forearm) they are merged into one cluster, tracked as the right hand. A small stateful object:
-/// while two hands stay visible, k-means starts from last frame's centroids and each cluster keeps
-/// its label, so hands keep their identity when they cross.
+/// while two hands stay visible, each cluster takes the label of the nearer of last frame's
+/// hands, so hands keep their identity when they cross.
 #pragma once
 
 #include <array>

@@ -255,8 +255,8 @@ std::vector<ClipDefinition> makeClips() {
                  {right, left}});
   }
   {
-    // Side by side with the thumbs and index fingers touching: 5 cm to the ulnar side each
-    // (the thumbs reach past the index knuckles), so the two hands make one connected surface.
+    // Side by side with the thumb tips touching: 6.5 cm to the ulnar side each (the thumbs
+    // reach past the index knuckles), so the two hands make one connected surface.
     std::vector<Key> right = openCloseTrack(), left = {key(0.0f, relaxed())};
     for (Key& k : right) k.offset.x() -= 0.065f;
     for (Key& k : left) k.offset.x() -= 0.065f;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "dynahand/cloud.h"
 #include "dynahand/synth.h"
@@ -41,6 +42,19 @@ double trackMeanError(synth::SyntheticSequence& seq, const TrackerSettings& sett
   return sum / n;
 }
 
+// The whole of animbank.pose (its mean forearm placement is the camera's) on `tof`, seen from
+// a head-mounted camera, rendered with `proportions`.
+synth::SynthOptions headMountedAnimbank(const std::filesystem::path& data,
+                                        const synth::HandProportions& proportions) {
+  synth::SynthOptions o;
+  o.poseFile = data / "intel" / "animbank.pose";
+  o.frameCount = 2336;
+  o.profile = "tof";
+  o.scene.placement = synth::CameraPlacement::HeadMounted;
+  o.proportions = proportions;
+  return o;
+}
+
 TEST(DetectorTracking, HandTurnedThroughEdgeOnIsRecovered) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
   // animbank.pose's first segment: the hand turns edge-on around frame 16.
@@ -64,12 +78,7 @@ TEST(DetectorTracking, HandTurnedThroughEdgeOnIsRecovered) {
 // and the tracker follows; centred on the limb's free end, it shows the fist.
 TEST(DetectorTracking, HeadMountedCropIsCentredOnTheLimbsFreeEnd) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
-  synth::SynthOptions o;
-  o.poseFile = data / "intel" / "animbank.pose";
-  o.frameCount = 2336;  // the whole file: its mean forearm placement is the camera's
-  o.profile = "tof";
-  o.scene.placement = synth::CameraPlacement::HeadMounted;
-  auto seq = synth::SyntheticSequence::create(o);
+  auto seq = synth::SyntheticSequence::create(headMountedAnimbank(data, {}));
   ASSERT_TRUE(seq) << seq.message();
   TrackerSettings centroidCrop;
   centroidCrop.detector.limbEndRadius = 0.0f;
@@ -161,13 +170,8 @@ TEST(DetectorTracking, ADetectionOffTheHandsPointsIsNotUsed) {
 // keeps them nearer the truth.
 TEST(DetectorTracking, AgreementWithTheDetectorChoosesAmongTheSimulations) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
-  synth::SynthOptions o;
-  o.poseFile = data / "intel" / "animbank.pose";
-  o.frameCount = 2336;  // the whole file: its mean forearm placement is the camera's
-  o.profile = "tof";
-  o.scene.placement = synth::CameraPlacement::HeadMounted;
-  o.proportions = synth::randomProportions(3, 0.15f);
-  auto seq = synth::SyntheticSequence::create(o);
+  auto seq = synth::SyntheticSequence::create(
+      headMountedAnimbank(data, synth::randomProportions(3, 0.15f)));
   ASSERT_TRUE(seq) << seq.message();
   TrackerSettings metricOnly;
   metricOnly.detector.selectionWeight = 0.0f;

@@ -76,9 +76,10 @@ constexpr const char* kMotionIntro =
     "`grasp-cylinder` and `reach-grasp-lift` at 2.5x with a ball, a cylinder and a box each, and "
     "every animbank segment with one of the three in turn; their errors count only the joints "
     "the object does not hide (whose pixel does not show the object). The table rows (`tof`, "
-    "`gt` start) play every animbank segment above a table 8 cm below the rest wrist position "
-    "(`dynahand synth --table --table-drop 0.08`); the captured motion passes through the table "
-    "at times, and the joints it hides then (a table pixel in front of them) are not scored. "
+    "`gt` start) play every animbank segment above a table 8 cm below the rest wrist position, "
+    "lowered where the segment's captured motion would take the hand into it until no joint "
+    "comes within 1.5 cm of it (`dynahand synth --table --table-drop 0.08 --table-below-hand`); "
+    "joints it hides (a table pixel in front of them) are not scored. "
     "Times are the "
     "tracker's wall time per frame on one thread (synthesis not included).";
 

@@ -115,6 +115,9 @@ void addSynthOptions(CLI::App& sub, const std::shared_ptr<SynthFlags>& flags) {
   sub.add_option("--table-drop", o.scene.tableDrop, "distance from the wrist down to the table, m")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 2.0));
+  sub.add_flag("--table-below-hand", o.scene.tableBelowHand,
+               "lower the table where the motion would take the hand into it (no joint nearer "
+               "than 1.5 cm)");
   sub.add_option("--object", flags->heldObject,
                  "an object held against the palm, moving with the hand: none, ball, cylinder "
                  "(rounded ends, across the palm) or box (docs/synth.md)")

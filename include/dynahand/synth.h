@@ -73,6 +73,10 @@ enum class HeldObject { None, Ball, Cylinder, Box };
 /// "none", "ball", "cylinder", "box".
 const char* heldObjectName(HeldObject object);
 
+/// m: how far above a Scene::tableBelowHand table the lowest joint stays (about the flesh of
+/// a palm or finger below its joint centre).
+inline constexpr float kTableClearance = 0.015f;
+
 /// The synthetic scene around the hand.
 struct Scene {
   CameraPlacement placement = CameraPlacement::DeskFacing;  ///< where the camera is
@@ -80,7 +84,11 @@ struct Scene {
   float backgroundDistance = 0.35f;  ///< m behind the hand (wall plane or torso front)
   bool table = false;                ///< a table plane below the hand
   float tableDrop = 0.20f;           ///< m from the wrist down to the table (world down)
-  float handDistance = 0.0f;         ///< m, camera to hand; 0 = auto: max(0.40, minRange + 0.2)
+  /// The table is lowered where the motion would take the hand into it: no joint of any frame
+  /// comes nearer to it than kTableClearance (the finger's or palm's flesh below the joint).
+  /// A hand then reaches down to the table at most, never through it.
+  bool tableBelowHand = false;
+  float handDistance = 0.0f;  ///< m, camera to hand; 0 = auto: max(0.40, minRange + 0.2)
   HeldObject heldObject = HeldObject::None;  ///< an object in the first hand, labelled HeldObject
   /// m: the ball's and the cylinder's radius, half the box's thickness (its cross-section is
   /// square), in [0.01, 0.06]. The object touches the palm's skin on its palmar side.

@@ -186,6 +186,25 @@ struct SyntheticSequence::State {
     }
   }
 
+  // Scene::tableBelowHand: lowers the table where the motion would take a joint nearer to it
+  // than kTableClearance (the drop given stays where it is lower already).
+  void lowerTableBelowHand() {
+    const Vec3 down = detail::downDirection(options.scene.placement);
+    const float restHeight = down.dot(rest.p);
+    float drop = options.scene.tableDrop;
+    std::vector<HandMotionSample> motion;
+    HandTruth truth;
+    for (int f = 0; f < options.frameCount; ++f) {
+      anglesAt(f, motion);
+      for (std::size_t h = 0; h < motion.size(); ++h) {
+        truthFor(motion[h], static_cast<int>(h), truth);
+        for (const Vec3& joint : truth.keypoints)
+          drop = std::max(drop, down.dot(joint) - restHeight + kTableClearance);
+      }
+    }
+    options.scene.tableDrop = drop;
+  }
+
   void truthFor(const HandMotionSample& sample, int hand, HandTruth& out) const {
     const model::ArticulatedModel& m = models[static_cast<std::size_t>(hand)];
     out.side = sample.side;
@@ -248,7 +267,8 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
         state->rest *
         meanPlacement(*state->playback, options.poseStart, options.frameCount).inverse();
   }
-  const detail::SceneGeometry geometry = detail::sceneGeometry(options.scene, handDistance);
+  if (options.scene.table && options.scene.tableBelowHand) state->lowerTableBelowHand();
+  const detail::SceneGeometry geometry = detail::sceneGeometry(state->options.scene, handDistance);
   state->renderer.setBackground(geometry.planes, geometry.solids);
   state->surfaceScale = options.hand.width / kReferenceWidth;
   state->radii = scaledRadii(options.surface, options.proportions);

@@ -59,6 +59,7 @@ std::string describe(const SyntheticSequence& seq, int writtenFrames) {
                 {"background_distance_m", o.scene.backgroundDistance},
                 {"table", o.scene.table},
                 {"table_drop_m", o.scene.tableDrop},
+                {"table_below_hand", o.scene.tableBelowHand},
                 {"hand_distance_m", o.scene.handDistance},
                 {"held_object", heldObjectName(o.scene.heldObject)},
                 {"held_object_size_m", o.scene.heldObjectSize}};

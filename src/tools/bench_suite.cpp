@@ -31,7 +31,8 @@ constexpr float kMotionSpeed = 2.5f;
 constexpr float kMotionProportionSpread = 0.15f;
 // The objects of the held-object rows.
 // The table rows' table: this far (m) below the wrist, which the fingers of a hand that
-// reaches down touch.
+// reaches down touch; lower where the segment's motion would take the hand into it
+// (synth::Scene::tableBelowHand).
 constexpr float kTableDropM = 0.08f;
 constexpr synth::HeldObject kHeldObjects[] = {synth::HeldObject::Ball, synth::HeldObject::Cylinder,
                                               synth::HeldObject::Box};
@@ -414,7 +415,10 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   so.hand = item.size.dimensions;
   so.scene.heldObject = item.heldObject;
   so.scene.table = item.tableDropM > 0.0f;
-  if (so.scene.table) so.scene.tableDrop = item.tableDropM;
+  if (so.scene.table) {
+    so.scene.tableDrop = item.tableDropM;
+    so.scene.tableBelowHand = true;
+  }
   auto seq = synth::SyntheticSequence::create(so);
   if (!seq) return Error{seq.message()};
   track::TrackerSettings settings = item.tracker;

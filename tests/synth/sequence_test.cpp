@@ -273,6 +273,44 @@ TEST(SyntheticSequence, SceneBackgroundTableAndForearmEnteringFromTheBorder) {
   }
 }
 
+// Joints of `frame` whose pixel shows the background (the table) 1 cm or more in front of them.
+int jointsBehindTheTable(const SyntheticSequence& seq, const SyntheticFrame& frame) {
+  const Intrinsics& k = seq.intrinsics();
+  int hidden = 0;
+  for (const Vec3& joint : frame.hands[0].keypoints) {
+    const Vec2 px = k.project(joint);
+    if (!k.contains(px.x(), px.y())) continue;
+    const auto i =
+        static_cast<std::size_t>(std::lround(px.y())) * static_cast<std::size_t>(k.width) +
+        static_cast<std::size_t>(std::lround(px.x()));
+    hidden += seq.labels()[i] == PixelLabel::Background && seq.exactDepth()[i] < joint.z() - 0.01f;
+  }
+  return hidden;
+}
+
+// A table at the wrist's height: the head-mounted open-close hand dips its fingers into it;
+// Scene::tableBelowHand lowers it so that no joint is ever behind it, and by no more than that.
+TEST(SyntheticSequence, ATableBelowTheHandIsLoweredOutOfTheMotionsWay) {
+  int hiddenAtTheWrist = 0, hiddenBelowHand = 0;
+  float lowered = 0.0f;
+  for (const bool belowHand : {false, true}) {
+    SynthOptions o = optionsFor("open-close", "ideal", 30);
+    o.scene.placement = CameraPlacement::HeadMounted;
+    o.scene.table = true;
+    o.scene.tableDrop = 0.0f;
+    o.scene.tableBelowHand = belowHand;
+    Result<SyntheticSequence> seq = SyntheticSequence::create(o);
+    ASSERT_TRUE(seq.ok()) << seq.error().message;
+    for (int f = 0; f < seq->frameCount(); f += 3)
+      (belowHand ? hiddenBelowHand : hiddenAtTheWrist) += jointsBehindTheTable(*seq, seq->frame(f));
+    if (belowHand) lowered = seq->options().scene.tableDrop;
+  }
+  EXPECT_GT(hiddenAtTheWrist, 10);
+  EXPECT_EQ(hiddenBelowHand, 0);
+  EXPECT_GT(lowered, kTableClearance);
+  EXPECT_LT(lowered, 0.15f);
+}
+
 // Each held object is drawn against the palm on every frame, labelled as the object, nearer
 // than the hand's back seen from a desk camera (palm toward it); without one, no pixel is.
 TEST(SyntheticSequence, HeldObjectsAreDrawnAgainstThePalm) {

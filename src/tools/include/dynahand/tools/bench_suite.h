@@ -70,8 +70,8 @@ struct SuiteItem {
   /// An object held against the palm (synth::Scene::heldObject); joints it hides from the
   /// camera (their pixel shows the object) are not scored.
   synth::HeldObject heldObject = synth::HeldObject::None;
-  /// A table this far (m) below the scene's rest wrist position (synth::Scene::tableDrop);
-  /// 0: none.
+  /// A table this far (m) below the scene's rest wrist position (synth::Scene::tableDrop), or
+  /// lower where the motion would take the hand into it (synth::Scene::tableBelowHand); 0: none.
   float tableDropM = 0.0f;
 };
 

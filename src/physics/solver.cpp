@@ -17,12 +17,9 @@
 #include <limits>
 #include <span>
 
+#include "core/simd/simd.h"
 #include "physics/kernel_paths.h"
 #include "physics/rows.h"
-
-#if defined(__SSE__)
-#include <xmmintrin.h>
-#endif
 
 namespace dynahand::physics {
 namespace {
@@ -224,33 +221,9 @@ void projectJointPositionsSideBySide(std::span<World::Impl* const> worlds, int i
 }
 }  // namespace
 
-namespace {
-// Flush denormals to zero for the duration of a step: velocities decaying towards rest pass
-// through the denormal range, where each float operation costs ~100 cycles. Restores the
-// caller's mode on exit. Deterministic either way (same mode every step).
-class FlushDenormals {
- public:
-#if defined(__SSE__)
-  FlushDenormals() : saved_(_mm_getcsr()) {
-    _mm_setcsr(saved_ | 0x8040u);
-  }  // FTZ | DAZ
-  ~FlushDenormals() {
-    _mm_setcsr(saved_);
-  }
-#endif
-  FlushDenormals(const FlushDenormals&) = delete;
-  FlushDenormals& operator=(const FlushDenormals&) = delete;
-
- private:
-#if defined(__SSE__)
-  unsigned int saved_;
-#endif
-};
-}  // namespace
-
 void World::step(float h) {
   assert(h > 0.0f && std::isfinite(h) && "step: dt must be positive");
-  const FlushDenormals flushDenormals;
+  const simd::FlushDenormals flushDenormals;
   beginStep(h);
   Impl& m = *impl_;
   auto sweep = [&](bool useBias) {
@@ -294,7 +267,7 @@ void World::stepSideBySide(std::span<World* const> worlds, float h) {
     for (World* w : worlds) w->step(h);
     return;
   }
-  const FlushDenormals flushDenormals;
+  const simd::FlushDenormals flushDenormals;
   std::array<Impl*, kMaxSideBySide> impls{};
   std::array<SurfaceBatches*, kMaxSideBySide> sweeps{};
   std::array<std::vector<SolverBody>*, kMaxSideBySide> bodies{};

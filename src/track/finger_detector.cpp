@@ -1,14 +1,10 @@
 #include "track/finger_detector.h"
 
-#include "core/cpu_features.h"
-
 #include <algorithm>
-#include <atomic>
 #include <cmath>
+#include <cstdint>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
+#include "core/simd/lanes.h"
 
 namespace dynahand::track {
 
@@ -29,8 +25,8 @@ int roundToPixel(float x) {
 // The samples of one scanline: sample col (t = tMin + col across, from rowBase = c + axis s)
 // is on when its pixel (c + axis s + across t, rounded) is in the box and on the mask. Bit
 // col % 64 of on[col / 64]; the words must hold `columns` bits, all clear. The box lies inside the
-// image; rowAvx2 reads pixel 0 for the lanes outside it (and ignores it), so the mask must not
-// be empty (detect() asks for 50 mask pixels).
+// image; sampleRow (finger_sampling.inl) reads pixel 0 for the lanes outside it (and ignores
+// it), so the mask must not be empty (detect() asks for 50 mask pixels).
 struct ScanlineSampler {
   const std::uint8_t* mask;
   int width;
@@ -50,73 +46,12 @@ struct ScanlineSampler {
       if (sample(rowBase, across, tMin + static_cast<float>(col)))
         on[col / 64] |= std::uint64_t{1} << (col % 64);
   }
-
-#if defined(__x86_64__) && defined(__GNUC__)
-  // roundToPixel of eight coordinates, all below 2^22 in magnitude.
-  __attribute__((target("avx2"), always_inline)) static inline __m256i roundToPixels(__m256 x) {
-    const __m256i i = _mm256_cvttps_epi32(x);
-    const __m256 fraction = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
-    // The compares give -1 where true: minus for >= 0.5, plus for <= -0.5.
-    const __m256i up =
-        _mm256_castps_si256(_mm256_cmp_ps(fraction, _mm256_set1_ps(0.5f), _CMP_GE_OQ));
-    const __m256i down =
-        _mm256_castps_si256(_mm256_cmp_ps(fraction, _mm256_set1_ps(-0.5f), _CMP_LE_OQ));
-    return _mm256_add_epi32(_mm256_sub_epi32(i, up), down);
-  }
-
-  // row() eight samples at a time: the same sums and products per sample, truncation and
-  // the fraction's test for the rounding, so the same pixels.
-  __attribute__((target("avx2"))) void rowAvx2(const Vec2& rowBase, const Vec2& across, float tMin,
-                                               int columns, std::uint64_t* on) const {
-    const __m256 baseX = _mm256_set1_ps(rowBase.x()), baseY = _mm256_set1_ps(rowBase.y());
-    const __m256 acrossX = _mm256_set1_ps(across.x()), acrossY = _mm256_set1_ps(across.y());
-    const __m256 first = _mm256_set1_ps(tMin);
-    const __m256 limit = _mm256_set1_ps(kExactRounding);
-    const __m256 absMask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    const __m256i x0 = _mm256_set1_epi32(box.x0 - 1), x1 = _mm256_set1_epi32(box.x1);
-    const __m256i y0 = _mm256_set1_epi32(box.y0 - 1), y1 = _mm256_set1_epi32(box.y1);
-    const __m256i stride = _mm256_set1_epi32(width);
-    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    for (int col = 0; col < columns; col += 8) {
-      const __m256i index = _mm256_add_epi32(_mm256_set1_epi32(col), lanes);
-      const __m256 t = _mm256_add_ps(first, _mm256_cvtepi32_ps(index));
-      const __m256 px = _mm256_add_ps(baseX, _mm256_mul_ps(acrossX, t));
-      const __m256 py = _mm256_add_ps(baseY, _mm256_mul_ps(acrossY, t));
-      const __m256 small =
-          _mm256_and_ps(_mm256_cmp_ps(_mm256_and_ps(px, absMask), limit, _CMP_LT_OQ),
-                        _mm256_cmp_ps(_mm256_and_ps(py, absMask), limit, _CMP_LT_OQ));
-      const int count = std::min(8, columns - col);
-      if (_mm256_movemask_ps(small) != 0xFF) {  // far outside any image: one by one
-        row(rowBase, across, tMin, col, col + count, on);
-        continue;
-      }
-      const __m256i u = roundToPixels(px), v = roundToPixels(py);
-      const __m256i inside =
-          _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(u, x0), _mm256_cmpgt_epi32(x1, u)),
-                           _mm256_and_si256(_mm256_cmpgt_epi32(v, y0), _mm256_cmpgt_epi32(y1, v)));
-      // Outside the box: pixel 0 (read, then ignored).
-      const __m256i pixel =
-          _mm256_and_si256(inside, _mm256_add_epi32(_mm256_mullo_epi32(v, stride), u));
-      alignas(32) int at[8];
-      _mm256_store_si256(reinterpret_cast<__m256i*>(at), pixel);
-      unsigned bits = 0;
-      for (int k = 0; k < 8; ++k)
-        bits |= static_cast<unsigned>(mask[static_cast<std::size_t>(at[k])] != 0) << k;
-      bits &= static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(inside)));
-      bits &= (1u << count) - 1;
-      on[col / 64] |= static_cast<std::uint64_t>(bits) << (col % 64);
-    }
-  }
-#endif
 };
 
-std::atomic<bool> vectorSampling{cpuHasAvx2()};
-}  // namespace
+#define DYNAHAND_SIMD_KERNELS "track/finger_sampling.inl"
+#include "core/simd/for_each_level.inl"
 
-bool FingerDetector::useVectorSampling(bool enabled) {
-  vectorSampling.store(enabled && cpuHasAvx2());
-  return vectorSampling.load();
-}
+}  // namespace
 
 // Word by word: single-sample gaps (an off sample with on samples either side) are filled
 // first, then each run is a block of ones.
@@ -225,7 +160,6 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
   // A sample t across the scanline through rowBase = c + axis s is on when its pixel
   // (c + axis s + across t, the same sums as one expression) is on the mask.
   const ScanlineSampler sampler{cloud.mask.data(), width, box};
-  [[maybe_unused]] const bool vector = vectorSampling.load(std::memory_order_relaxed);
   rowSamples_.resize(static_cast<std::size_t>(columns + 63) / 64);
   std::uint64_t* const on = rowSamples_.data();
 
@@ -235,12 +169,7 @@ bool FingerDetector::scanAlong(const CloudFrame& cloud, const Vec2& c, const Vec
     const float s = sMax - static_cast<float>(row);
     const Vec2 rowBase = c + axis * s;
     std::fill(rowSamples_.begin(), rowSamples_.end(), std::uint64_t{0});
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (vector)
-      sampler.rowAvx2(rowBase, across, tMin, columns, on);
-    else
-#endif
-      sampler.row(rowBase, across, tMin, 0, columns, on);
+    DYNAHAND_SIMD_DISPATCH(sampleRow, sampler, rowBase, across, tMin, columns, on);
     scanlineRuns(on, columns, runs_);
     continueSegments(row, minLength, minWidth, maxWidth);
     // Fire once five fingers were seen apart and the scan has reached the palm: at most two

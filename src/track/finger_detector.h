@@ -47,10 +47,6 @@ class FingerDetector {
   explicit FingerDetector(const FingerDetectorSettings& settings = {}) : settings_(settings) {}
   // Looks for an open hand in the cloud's segmentation mask.
   const FingerDetection& detect(const CloudFrame& cloud);
-  // Scanlines are sampled eight samples per AVX2 instruction where the CPU has AVX2 (on by
-  // default), else one by one; both give the same detections. false forces the one-by-one
-  // path (for tests comparing the two); returns whether the vector path is now in use.
-  static bool useVectorSampling(bool enabled);
 
  private:
   using Run = ScanlineRun;

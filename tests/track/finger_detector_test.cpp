@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <numbers>
 #include <random>
 #include <utility>
 #include <vector>
 
+#include "core/simd/simd.h"
 #include "dynahand/cloud.h"
 #include "dynahand/model.h"
 #include "track/finger_detector.h"
@@ -82,36 +84,41 @@ TEST(FingerDetector, FindsTheFiveFingertipsOfASpreadHandAtAnyTurn) {
   }
 }
 
-// The scanlines sampled eight at a time (AVX2) and one by one give the same detections, bit
-// for bit: hands spread and in a fist, turned, near and far.
-TEST(FingerDetector, VectorSamplingDetectsLikeOneByOne) {
+// The scanlines sampled on every SIMD level the CPU has (core/simd) give the scalar level's
+// detections, bit for bit: hands spread and in a fist, turned, near and far.
+TEST(FingerDetector, EverySimdLevelDetectsLikeTheScalarOne) {
   const auto hand = model::makeDefaultHand();
-  if (!FingerDetector::useVectorSampling(true)) GTEST_SKIP() << "no AVX2 on this CPU";
+  const simd::Level best = simd::bestLevel();
   int fired = 0, compared = 0;
   for (const bool spread : {true, false}) {
     for (const float turn : {0.0f, 25.0f, -45.0f, 70.0f, 180.0f}) {
       for (const float distance : {0.3f, 0.45f}) {
         const model::JointAngles angles = spread ? spreadAngles(hand) : fistAngles(hand);
-        FingerDetector::useVectorSampling(false);
-        const Detected one = detectAt(angles, turn, distance);
-        FingerDetector::useVectorSampling(true);
-        const Detected eight = detectAt(angles, turn, distance);
-        SCOPED_TRACE(testing::Message()
-                     << "spread " << spread << " turn " << turn << " at " << distance);
-        ASSERT_EQ(one.fired, eight.fired);
+        simd::forceLevel(simd::Level::Scalar);
+        const Detected reference = detectAt(angles, turn, distance);
         ++compared;
-        if (!one.fired) continue;
-        ++fired;
-        for (std::size_t f = 0; f < 5; ++f) {
-          for (int c = 0; c < 3; ++c)
-            EXPECT_EQ(one.detection.tips[f][c], eight.detection.tips[f][c]) << "tip " << f;
-          for (int c = 0; c < 2; ++c)
-            EXPECT_EQ(one.detection.tipPixels[f][c], eight.detection.tipPixels[f][c])
-                << "tip " << f;
+        fired += reference.fired;
+        for (int l = 1; l <= static_cast<int>(best); ++l) {
+          const auto level = static_cast<simd::Level>(l);
+          ASSERT_EQ(simd::forceLevel(level), level);
+          const Detected wide = detectAt(angles, turn, distance);
+          SCOPED_TRACE(testing::Message() << simd::levelName(level) << ": spread " << spread
+                                          << " turn " << turn << " at " << distance);
+          ASSERT_EQ(reference.fired, wide.fired);
+          if (!reference.fired) continue;
+          for (std::size_t f = 0; f < 5; ++f) {
+            for (int c = 0; c < 3; ++c)
+              EXPECT_EQ(reference.detection.tips[f][c], wide.detection.tips[f][c]) << "tip " << f;
+            for (int c = 0; c < 2; ++c)
+              EXPECT_EQ(reference.detection.tipPixels[f][c], wide.detection.tipPixels[f][c])
+                  << "tip " << f;
+          }
         }
       }
     }
   }
+  simd::forceLevel(best);
+  std::printf("compared the scalar level with %d wider level(s)\n", static_cast<int>(best));
   EXPECT_EQ(compared, 20);
   EXPECT_GE(fired, 4);  // spread hands are found (the comparison is not all "not fired")
 }

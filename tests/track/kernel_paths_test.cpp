@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/simd/simd.h"
 #include "dynahand/core.h"
 #include "dynahand/synth.h"
 #include "dynahand/tracker.h"
@@ -27,14 +28,15 @@ constexpr int kFrames = 20;
 // narrow, in the order of kPathNames); returns which fast paths are in use.
 constexpr const char* kPathNames[] = {"surface prepare (SSE)", "surface sweeps (AVX)",
                                       "plane scan (AVX)", "plane scan mask (AVX-512)",
-                                      "finger sampling (AVX2)"};
+                                      "SIMD layer kernels (core/simd, widest level)"};
 unsigned choosePaths(unsigned narrow) {
   unsigned fast = 0;
   fast |= physics::useWideSurfacePrepare((narrow & 1u) == 0) ? 1u : 0u;
   fast |= physics::useVectorSweeps((narrow & 2u) == 0) ? 2u : 0u;
   fast |= PosedBodies::useWidePlaneScan((narrow & 4u) == 0) ? 4u : 0u;
   fast |= PosedBodies::useMaskedPlaneScan((narrow & 8u) == 0) ? 8u : 0u;
-  fast |= FingerDetector::useVectorSampling((narrow & 16u) == 0) ? 16u : 0u;
+  const simd::Level level = (narrow & 16u) == 0 ? simd::bestLevel() : simd::Level::Scalar;
+  fast |= simd::forceLevel(level) != simd::Level::Scalar ? 16u : 0u;
   return fast;
 }
 
@@ -92,6 +94,13 @@ TEST(KernelPaths, EveryPathTracksTheStandardClipsToTheSameBytes) {
   choosePaths(~0u);
   EXPECT_EQ(trackStandardClips(clips), reference) << "every path forced narrow";
   EXPECT_EQ(choosePaths(0), fast);  // the defaults again
+  // Every level of the SIMD layer in turn (scalar, SSE2, AVX2, as far as the CPU goes).
+  for (int l = 0; l < static_cast<int>(simd::bestLevel()); ++l) {
+    const auto level = static_cast<simd::Level>(l);
+    ASSERT_EQ(simd::forceLevel(level), level);
+    EXPECT_EQ(trackStandardClips(clips), reference) << "SIMD level " << simd::levelName(level);
+  }
+  simd::forceLevel(simd::bestLevel());
 }
 
 // The tracker's output on the standard clips without the learned detector (whose OpenCV kernels

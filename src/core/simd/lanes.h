@@ -1,0 +1,336 @@
+// The SIMD layer's eight-lane types and the few operations the kernels need, once per level
+// (simd.h): namespaces simd::scalar (plain C++, the reference), simd::sse2 (two 128-bit halves)
+// and simd::avx2 (one 256-bit register). Each level defines
+//   FloatW  eight floats;   IntW  eight int32;   MaskW  eight booleans (a compare's result);
+// with the same functions and the same results bit for bit: IEEE single-precision arithmetic
+// lane by lane, int32 arithmetic wrapping modulo 2^32, x86's conversion rules (truncation of a
+// float outside the int32 range or NaN gives INT32_MIN), compares false on NaN.
+//
+// Kernels do not include this directly: for_each_level.inl compiles a kernel file once per
+// level inside a namespace that sees that level's names, and simd.h's DYNAHAND_SIMD_DISPATCH
+// calls the build for simd::level(). This file and for_each_level.inl are the only ones that
+// name intrinsics.
+#pragma once
+
+#include <bit>
+#include <cstdint>
+
+#include "core/simd/simd.h"
+
+#if DYNAHAND_SIMD_X86
+#include <immintrin.h>
+#endif
+
+#define DYNAHAND_SIMD_INLINE inline __attribute__((always_inline))
+
+namespace dynahand::simd {
+
+inline constexpr int kLanes = 8;
+
+namespace scalar {
+
+struct FloatW {
+  float lane[kLanes];
+};
+struct IntW {
+  std::int32_t lane[kLanes];
+};
+struct MaskW {
+  unsigned bits;  // bit i: lane i
+};
+
+DYNAHAND_SIMD_INLINE FloatW splat(float x) {
+  FloatW r;
+  for (float& l : r.lane) l = x;
+  return r;
+}
+DYNAHAND_SIMD_INLINE IntW splat(std::int32_t x) {
+  IntW r;
+  for (std::int32_t& l : r.lane) l = x;
+  return r;
+}
+// 0, 1, ..., 7.
+DYNAHAND_SIMD_INLINE IntW iota() {
+  IntW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = i;
+  return r;
+}
+DYNAHAND_SIMD_INLINE FloatW load(const float* p) {
+  FloatW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = p[i];
+  return r;
+}
+DYNAHAND_SIMD_INLINE void store(float* p, FloatW a) {
+  for (int i = 0; i < kLanes; ++i) p[i] = a.lane[i];
+}
+DYNAHAND_SIMD_INLINE void store(std::int32_t* p, IntW a) {
+  for (int i = 0; i < kLanes; ++i) p[i] = a.lane[i];
+}
+
+#define DYNAHAND_SIMD_SCALAR_BINARY(Type, op, expr)       \
+  DYNAHAND_SIMD_INLINE Type operator op(Type a, Type b) { \
+    Type r;                                               \
+    for (int i = 0; i < kLanes; ++i) r.lane[i] = expr;    \
+    return r;                                             \
+  }
+DYNAHAND_SIMD_SCALAR_BINARY(FloatW, +, a.lane[i] + b.lane[i])
+DYNAHAND_SIMD_SCALAR_BINARY(FloatW, -, a.lane[i] - b.lane[i])
+DYNAHAND_SIMD_SCALAR_BINARY(FloatW, *, a.lane[i] * b.lane[i])
+// Wrapping, as the vector instructions do (no signed overflow).
+DYNAHAND_SIMD_SCALAR_BINARY(IntW, +,
+                            static_cast<std::int32_t>(static_cast<std::uint32_t>(a.lane[i]) +
+                                                      static_cast<std::uint32_t>(b.lane[i])))
+DYNAHAND_SIMD_SCALAR_BINARY(IntW, -,
+                            static_cast<std::int32_t>(static_cast<std::uint32_t>(a.lane[i]) -
+                                                      static_cast<std::uint32_t>(b.lane[i])))
+#undef DYNAHAND_SIMD_SCALAR_BINARY
+
+// The low 32 bits of each product.
+DYNAHAND_SIMD_INLINE IntW mulLow(IntW a, IntW b) {
+  IntW r;
+  for (int i = 0; i < kLanes; ++i)
+    r.lane[i] = static_cast<std::int32_t>(static_cast<std::uint32_t>(a.lane[i]) *
+                                          static_cast<std::uint32_t>(b.lane[i]));
+  return r;
+}
+DYNAHAND_SIMD_INLINE FloatW abs(FloatW a) {
+  FloatW r;
+  for (int i = 0; i < kLanes; ++i)
+    r.lane[i] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(a.lane[i]) & 0x7fffffffu);
+  return r;
+}
+DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
+  FloatW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = static_cast<float>(a.lane[i]);
+  return r;
+}
+// Toward zero; INT32_MIN outside [-2^31, 2^31) and for NaN (x86's "integer indefinite").
+DYNAHAND_SIMD_INLINE IntW truncate(FloatW a) {
+  IntW r;
+  for (int i = 0; i < kLanes; ++i) {
+    const float x = a.lane[i];
+    r.lane[i] = x >= -2147483648.0f && x < 2147483648.0f ? static_cast<std::int32_t>(x) : INT32_MIN;
+  }
+  return r;
+}
+
+#define DYNAHAND_SIMD_SCALAR_COMPARE(Type, op)                                                   \
+  DYNAHAND_SIMD_INLINE MaskW operator op(Type a, Type b) {                                       \
+    unsigned bits = 0;                                                                           \
+    for (int i = 0; i < kLanes; ++i) bits |= static_cast<unsigned>(a.lane[i] op b.lane[i]) << i; \
+    return {bits};                                                                               \
+  }
+DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, <)
+DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, <=)
+DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, >=)
+DYNAHAND_SIMD_SCALAR_COMPARE(IntW, >)
+#undef DYNAHAND_SIMD_SCALAR_COMPARE
+
+DYNAHAND_SIMD_INLINE MaskW operator&(MaskW a, MaskW b) {
+  return {a.bits & b.bits};
+}
+// Bit i set where lane i is true.
+DYNAHAND_SIMD_INLINE unsigned bits(MaskW m) {
+  return m.bits;
+}
+DYNAHAND_SIMD_INLINE bool all(MaskW m) {
+  return m.bits == 0xffu;
+}
+// a where m, else b.
+DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
+  IntW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = ((m.bits >> i) & 1u) != 0 ? a.lane[i] : b.lane[i];
+  return r;
+}
+
+}  // namespace scalar
+
+#if DYNAHAND_SIMD_X86
+
+namespace sse2 {
+
+struct FloatW {
+  __m128 lo, hi;
+};
+struct IntW {
+  __m128i lo, hi;
+};
+struct MaskW {
+  __m128i lo, hi;  // all ones in a true lane
+};
+
+DYNAHAND_SIMD_INLINE FloatW splat(float x) {
+  return {_mm_set1_ps(x), _mm_set1_ps(x)};
+}
+DYNAHAND_SIMD_INLINE IntW splat(std::int32_t x) {
+  return {_mm_set1_epi32(x), _mm_set1_epi32(x)};
+}
+DYNAHAND_SIMD_INLINE IntW iota() {
+  return {_mm_setr_epi32(0, 1, 2, 3), _mm_setr_epi32(4, 5, 6, 7)};
+}
+DYNAHAND_SIMD_INLINE FloatW load(const float* p) {
+  return {_mm_loadu_ps(p), _mm_loadu_ps(p + 4)};
+}
+DYNAHAND_SIMD_INLINE void store(float* p, FloatW a) {
+  _mm_storeu_ps(p, a.lo);
+  _mm_storeu_ps(p + 4, a.hi);
+}
+DYNAHAND_SIMD_INLINE void store(std::int32_t* p, IntW a) {
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(p), a.lo);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(p + 4), a.hi);
+}
+DYNAHAND_SIMD_INLINE FloatW operator+(FloatW a, FloatW b) {
+  return {_mm_add_ps(a.lo, b.lo), _mm_add_ps(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE FloatW operator-(FloatW a, FloatW b) {
+  return {_mm_sub_ps(a.lo, b.lo), _mm_sub_ps(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE FloatW operator*(FloatW a, FloatW b) {
+  return {_mm_mul_ps(a.lo, b.lo), _mm_mul_ps(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE IntW operator+(IntW a, IntW b) {
+  return {_mm_add_epi32(a.lo, b.lo), _mm_add_epi32(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE IntW operator-(IntW a, IntW b) {
+  return {_mm_sub_epi32(a.lo, b.lo), _mm_sub_epi32(a.hi, b.hi)};
+}
+// SSE2 has no 32-bit low multiply: two 32x32 -> 64 products of the even and odd lanes.
+DYNAHAND_SIMD_INLINE __m128i mulLow4(__m128i a, __m128i b) {
+  const __m128i even = _mm_mul_epu32(a, b);
+  const __m128i odd = _mm_mul_epu32(_mm_srli_si128(a, 4), _mm_srli_si128(b, 4));
+  return _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
+                            _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
+}
+DYNAHAND_SIMD_INLINE IntW mulLow(IntW a, IntW b) {
+  return {mulLow4(a.lo, b.lo), mulLow4(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE FloatW abs(FloatW a) {
+  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  return {_mm_and_ps(a.lo, magnitude), _mm_and_ps(a.hi, magnitude)};
+}
+DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
+  return {_mm_cvtepi32_ps(a.lo), _mm_cvtepi32_ps(a.hi)};
+}
+DYNAHAND_SIMD_INLINE IntW truncate(FloatW a) {
+  return {_mm_cvttps_epi32(a.lo), _mm_cvttps_epi32(a.hi)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator<(FloatW a, FloatW b) {
+  return {_mm_castps_si128(_mm_cmplt_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmplt_ps(a.hi, b.hi))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator<=(FloatW a, FloatW b) {
+  return {_mm_castps_si128(_mm_cmple_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmple_ps(a.hi, b.hi))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
+  return {_mm_castps_si128(_mm_cmpge_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmpge_ps(a.hi, b.hi))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator>(IntW a, IntW b) {
+  return {_mm_cmpgt_epi32(a.lo, b.lo), _mm_cmpgt_epi32(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator&(MaskW a, MaskW b) {
+  return {_mm_and_si128(a.lo, b.lo), _mm_and_si128(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE unsigned bits(MaskW m) {
+  return static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(m.lo))) |
+         static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(m.hi))) << 4;
+}
+DYNAHAND_SIMD_INLINE bool all(MaskW m) {
+  return bits(m) == 0xffu;
+}
+DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
+  return {_mm_or_si128(_mm_and_si128(m.lo, a.lo), _mm_andnot_si128(m.lo, b.lo)),
+          _mm_or_si128(_mm_and_si128(m.hi, a.hi), _mm_andnot_si128(m.hi, b.hi))};
+}
+
+}  // namespace sse2
+
+DYNAHAND_SIMD_BEGIN_AVX2
+
+namespace avx2 {
+
+struct FloatW {
+  __m256 v;
+};
+struct IntW {
+  __m256i v;
+};
+struct MaskW {
+  __m256i v;  // all ones in a true lane
+};
+
+DYNAHAND_SIMD_INLINE FloatW splat(float x) {
+  return {_mm256_set1_ps(x)};
+}
+DYNAHAND_SIMD_INLINE IntW splat(std::int32_t x) {
+  return {_mm256_set1_epi32(x)};
+}
+DYNAHAND_SIMD_INLINE IntW iota() {
+  return {_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)};
+}
+DYNAHAND_SIMD_INLINE FloatW load(const float* p) {
+  return {_mm256_loadu_ps(p)};
+}
+DYNAHAND_SIMD_INLINE void store(float* p, FloatW a) {
+  _mm256_storeu_ps(p, a.v);
+}
+DYNAHAND_SIMD_INLINE void store(std::int32_t* p, IntW a) {
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), a.v);
+}
+DYNAHAND_SIMD_INLINE FloatW operator+(FloatW a, FloatW b) {
+  return {_mm256_add_ps(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE FloatW operator-(FloatW a, FloatW b) {
+  return {_mm256_sub_ps(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE FloatW operator*(FloatW a, FloatW b) {
+  return {_mm256_mul_ps(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE IntW operator+(IntW a, IntW b) {
+  return {_mm256_add_epi32(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE IntW operator-(IntW a, IntW b) {
+  return {_mm256_sub_epi32(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE IntW mulLow(IntW a, IntW b) {
+  return {_mm256_mullo_epi32(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE FloatW abs(FloatW a) {
+  return {_mm256_and_ps(a.v, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)))};
+}
+DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
+  return {_mm256_cvtepi32_ps(a.v)};
+}
+DYNAHAND_SIMD_INLINE IntW truncate(FloatW a) {
+  return {_mm256_cvttps_epi32(a.v)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator<(FloatW a, FloatW b) {
+  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator<=(FloatW a, FloatW b) {
+  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
+  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator>(IntW a, IntW b) {
+  return {_mm256_cmpgt_epi32(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator&(MaskW a, MaskW b) {
+  return {_mm256_and_si256(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE unsigned bits(MaskW m) {
+  return static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(m.v)));
+}
+DYNAHAND_SIMD_INLINE bool all(MaskW m) {
+  return bits(m) == 0xffu;
+}
+DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
+  return {_mm256_blendv_epi8(b.v, a.v, m.v)};
+}
+
+}  // namespace avx2
+
+DYNAHAND_SIMD_END
+
+#endif  // DYNAHAND_SIMD_X86
+
+}  // namespace dynahand::simd

@@ -5,7 +5,8 @@
 
 namespace dynahand::physics {
 
-// World::step prepares the surface rows four at a time with SSE (default on).
+// World::step prepares the surface rows eight at a time (the SIMD layer, default on) or one
+// at a time.
 bool useWideSurfacePrepare(bool enabled);
 // World::step solves the surface rows eight at a time with AVX (default on).
 bool useVectorSweeps(bool enabled);

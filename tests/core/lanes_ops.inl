@@ -37,6 +37,7 @@ inline void applyOps(const float* a, const float* b, const std::int32_t* i, cons
   putFloat(fa + fb);
   putFloat(fa - fb);
   putFloat(fa * fb);
+  putFloat(fa / fb);
   putFloat(abs(fa));
   putFloat(toFloat(ia));
   putInt(truncate(fa));
@@ -45,10 +46,12 @@ inline void applyOps(const float* a, const float* b, const std::int32_t* i, cons
   putInt(mulLow(ia, ib));
   putMask(fa < fb);
   putMask(fa <= fb);
+  putMask(fa > fb);
   putMask(fa >= fb);
   putMask(ia > ib);
   putMask((fa < fb) & (ia > ib));
   putInt(select(fa < fb, ia, ib));
+  putFloat(select(fa > fb, fa, fb));
   putInt(iota());
   putFloat(splat(a[3]));
   for (int lane = 0; lane < kLanes; ++lane) out[op][lane] = all(fa <= fa) ? 1u : 0u;

@@ -22,6 +22,7 @@ namespace {
 constexpr const char* kOpNames[] = {"a + b",
                                     "a - b",
                                     "a * b",
+                                    "a / b",
                                     "abs(a)",
                                     "toFloat(i)",
                                     "truncate(a)",
@@ -30,10 +31,12 @@ constexpr const char* kOpNames[] = {"a + b",
                                     "mulLow(i, j)",
                                     "a < b",
                                     "a <= b",
+                                    "a > b",
                                     "a >= b",
                                     "i > j",
                                     "(a < b) & (i > j)",
                                     "select(a < b, i, j)",
+                                    "select(a > b, a, b)",
                                     "iota()",
                                     "splat(a[3])",
                                     "all(a <= a)"};
@@ -116,7 +119,7 @@ TEST(SimdLanes, TheScalarLevelFollowsTheX86Rules) {
   const std::int32_t j[8] = {1, 1, 65536, -4, 4, 0, 7, 7};
   const Results r = run(simd::Level::Scalar, a, b, i, j);
   simd::forceLevel(simd::bestLevel());
-  const int truncateOp = 5, addOp = 6, subOp = 7, mulOp = 8;
+  const int truncateOp = 6, addOp = 7, subOp = 8, mulOp = 9;
   const auto asInt = [](std::uint32_t x) { return static_cast<std::int32_t>(x); };
   EXPECT_EQ(asInt(r.lanes[truncateOp][0]), INT32_MIN);  // out of range
   EXPECT_EQ(asInt(r.lanes[truncateOp][1]), INT32_MIN);

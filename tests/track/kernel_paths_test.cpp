@@ -26,7 +26,7 @@ constexpr int kFrames = 20;
 
 // Every kernel's fast path on (where the CPU has it) but `narrow` (bit i: path i forced
 // narrow, in the order of kPathNames); returns which fast paths are in use.
-constexpr const char* kPathNames[] = {"surface prepare (SSE)", "surface sweeps (AVX)",
+constexpr const char* kPathNames[] = {"surface prepare (8 lanes)", "surface sweeps (AVX)",
                                       "plane scan (AVX)", "plane scan mask (AVX-512)",
                                       "SIMD layer kernels (core/simd, widest level)"};
 unsigned choosePaths(unsigned narrow) {

@@ -76,6 +76,7 @@ DYNAHAND_SIMD_INLINE void store(std::int32_t* p, IntW a) {
 DYNAHAND_SIMD_SCALAR_BINARY(FloatW, +, a.lane[i] + b.lane[i])
 DYNAHAND_SIMD_SCALAR_BINARY(FloatW, -, a.lane[i] - b.lane[i])
 DYNAHAND_SIMD_SCALAR_BINARY(FloatW, *, a.lane[i] * b.lane[i])
+DYNAHAND_SIMD_SCALAR_BINARY(FloatW, /, a.lane[i] / b.lane[i])
 // Wrapping, as the vector instructions do (no signed overflow).
 DYNAHAND_SIMD_SCALAR_BINARY(IntW, +,
                             static_cast<std::int32_t>(static_cast<std::uint32_t>(a.lane[i]) +
@@ -122,6 +123,7 @@ DYNAHAND_SIMD_INLINE IntW truncate(FloatW a) {
   }
 DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, <)
 DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, <=)
+DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, >)
 DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, >=)
 DYNAHAND_SIMD_SCALAR_COMPARE(IntW, >)
 #undef DYNAHAND_SIMD_SCALAR_COMPARE
@@ -139,6 +141,11 @@ DYNAHAND_SIMD_INLINE bool all(MaskW m) {
 // a where m, else b.
 DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
   IntW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = ((m.bits >> i) & 1u) != 0 ? a.lane[i] : b.lane[i];
+  return r;
+}
+DYNAHAND_SIMD_INLINE FloatW select(MaskW m, FloatW a, FloatW b) {
+  FloatW r;
   for (int i = 0; i < kLanes; ++i) r.lane[i] = ((m.bits >> i) & 1u) != 0 ? a.lane[i] : b.lane[i];
   return r;
 }
@@ -188,6 +195,9 @@ DYNAHAND_SIMD_INLINE FloatW operator-(FloatW a, FloatW b) {
 DYNAHAND_SIMD_INLINE FloatW operator*(FloatW a, FloatW b) {
   return {_mm_mul_ps(a.lo, b.lo), _mm_mul_ps(a.hi, b.hi)};
 }
+DYNAHAND_SIMD_INLINE FloatW operator/(FloatW a, FloatW b) {
+  return {_mm_div_ps(a.lo, b.lo), _mm_div_ps(a.hi, b.hi)};
+}
 DYNAHAND_SIMD_INLINE IntW operator+(IntW a, IntW b) {
   return {_mm_add_epi32(a.lo, b.lo), _mm_add_epi32(a.hi, b.hi)};
 }
@@ -220,6 +230,9 @@ DYNAHAND_SIMD_INLINE MaskW operator<(FloatW a, FloatW b) {
 DYNAHAND_SIMD_INLINE MaskW operator<=(FloatW a, FloatW b) {
   return {_mm_castps_si128(_mm_cmple_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmple_ps(a.hi, b.hi))};
 }
+DYNAHAND_SIMD_INLINE MaskW operator>(FloatW a, FloatW b) {
+  return {_mm_castps_si128(_mm_cmpgt_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmpgt_ps(a.hi, b.hi))};
+}
 DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
   return {_mm_castps_si128(_mm_cmpge_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmpge_ps(a.hi, b.hi))};
 }
@@ -239,6 +252,11 @@ DYNAHAND_SIMD_INLINE bool all(MaskW m) {
 DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
   return {_mm_or_si128(_mm_and_si128(m.lo, a.lo), _mm_andnot_si128(m.lo, b.lo)),
           _mm_or_si128(_mm_and_si128(m.hi, a.hi), _mm_andnot_si128(m.hi, b.hi))};
+}
+DYNAHAND_SIMD_INLINE FloatW select(MaskW m, FloatW a, FloatW b) {
+  const __m128 lo = _mm_castsi128_ps(m.lo), hi = _mm_castsi128_ps(m.hi);
+  return {_mm_or_ps(_mm_and_ps(lo, a.lo), _mm_andnot_ps(lo, b.lo)),
+          _mm_or_ps(_mm_and_ps(hi, a.hi), _mm_andnot_ps(hi, b.hi))};
 }
 
 }  // namespace sse2
@@ -284,6 +302,9 @@ DYNAHAND_SIMD_INLINE FloatW operator-(FloatW a, FloatW b) {
 DYNAHAND_SIMD_INLINE FloatW operator*(FloatW a, FloatW b) {
   return {_mm256_mul_ps(a.v, b.v)};
 }
+DYNAHAND_SIMD_INLINE FloatW operator/(FloatW a, FloatW b) {
+  return {_mm256_div_ps(a.v, b.v)};
+}
 DYNAHAND_SIMD_INLINE IntW operator+(IntW a, IntW b) {
   return {_mm256_add_epi32(a.v, b.v)};
 }
@@ -308,6 +329,9 @@ DYNAHAND_SIMD_INLINE MaskW operator<(FloatW a, FloatW b) {
 DYNAHAND_SIMD_INLINE MaskW operator<=(FloatW a, FloatW b) {
   return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ))};
 }
+DYNAHAND_SIMD_INLINE MaskW operator>(FloatW a, FloatW b) {
+  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ))};
+}
 DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
   return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ))};
 }
@@ -325,6 +349,9 @@ DYNAHAND_SIMD_INLINE bool all(MaskW m) {
 }
 DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
   return {_mm256_blendv_epi8(b.v, a.v, m.v)};
+}
+DYNAHAND_SIMD_INLINE FloatW select(MaskW m, FloatW a, FloatW b) {
+  return {_mm256_blendv_ps(b.v, a.v, _mm256_castsi256_ps(m.v))};
 }
 
 }  // namespace avx2

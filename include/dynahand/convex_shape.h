@@ -76,7 +76,7 @@ class ConvexShape {
   std::vector<float> vertexX_, vertexY_, vertexZ_;  ///< vertices_ as SoA
   std::vector<Face> faces_;
   /// Every hull edge once, as start point a, direction d = b - a and 1 / |d|^2, SoA padded to a
-  /// multiple of four with far zero-length edges: an outside point whose foot misses its
+  /// multiple of eight with far zero-length edges: an outside point whose foot misses its
   /// farthest face is nearest to one of them.
   std::vector<float> edgeAx_, edgeAy_, edgeAz_, edgeDx_, edgeDy_, edgeDz_, edgeInvLen2_;
   struct EdgeInfo {

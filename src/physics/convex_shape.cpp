@@ -12,9 +12,7 @@
 #include <string>
 #include <utility>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include "core/simd/lanes.h"
 
 extern "C" {
 #include <libqhull_r/qhull_ra.h>
@@ -50,6 +48,9 @@ class CapturedStream {
   std::size_t size_ = 0;
   FILE* file_ = nullptr;
 };
+
+#define DYNAHAND_SIMD_KERNELS "physics/convex_shape.inl"
+#include "core/simd/for_each_level.inl"
 
 }  // namespace
 
@@ -188,7 +189,7 @@ void ConvexShape::buildEdges() {
     vertexY_[i] = vertices_[i].y();
     vertexZ_[i] = vertices_[i].z();
   }
-  const std::size_t padded = (edges_.size() + 3) / 4 * 4;
+  const std::size_t padded = (edges_.size() + simd::kLanes - 1) / simd::kLanes * simd::kLanes;
   for (auto* v : {&edgeAx_, &edgeAy_, &edgeAz_}) v->assign(padded, 1e15f);
   for (auto* v : {&edgeDx_, &edgeDy_, &edgeDz_, &edgeInvLen2_}) v->assign(padded, 0.0f);
   for (std::size_t e = 0; e < edges_.size(); ++e) {
@@ -210,79 +211,23 @@ void ConvexShape::vertexHeights(const Vec3& direction, float* out) const {
   const std::size_t n = vertices_.size();
   assert(vertexX_.size() == n);
   std::size_t i = 0;
-#if defined(__SSE2__)
-  const __m128 dx = _mm_set1_ps(direction.x()), dy = _mm_set1_ps(direction.y()),
-               dz = _mm_set1_ps(direction.z());
-  for (; i + 4 <= n; i += 4) {
-    const __m128 h = _mm_add_ps(_mm_mul_ps(dx, _mm_loadu_ps(vertexX_.data() + i)),
-                                _mm_add_ps(_mm_mul_ps(dy, _mm_loadu_ps(vertexY_.data() + i)),
-                                           _mm_mul_ps(dz, _mm_loadu_ps(vertexZ_.data() + i))));
-    _mm_storeu_ps(out + i, h);
-  }
-#endif
+  DYNAHAND_SIMD_DISPATCH(vertexHeightLanes, vertexX_.data(), vertexY_.data(), vertexZ_.data(), n,
+                         direction, out, &i);
   for (; i < n; ++i) out[i] = direction.dot(vertices_[i]);
 }
 
 float ConvexShape::nearestEdge(const Vec3& p, int* edge, float* t) const {
-  // Four edges per step, each lane keeping its own minimum; the same arithmetic per lane in
-  // the SSE and the scalar path.
+  // Eight edges per step, each lane keeping its own first minimum; then the least of the
+  // lanes, the lowest index among equal ones: the same edge as one by one.
   const std::size_t n = edgeAx_.size();
-  alignas(16) float best[4];
-  alignas(16) std::int32_t index[4];
-#if defined(__SSE2__)
-  const __m128 px = _mm_set1_ps(p.x()), py = _mm_set1_ps(p.y()), pz = _mm_set1_ps(p.z());
-  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
-  __m128 bestV = _mm_set1_ps(std::numeric_limits<float>::infinity());
-  __m128i indexV = _mm_setzero_si128();
-  __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
-  const __m128i four = _mm_set1_epi32(4);
-  for (std::size_t e = 0; e < n; e += 4) {
-    const __m128 wx = _mm_sub_ps(px, _mm_loadu_ps(edgeAx_.data() + e));
-    const __m128 wy = _mm_sub_ps(py, _mm_loadu_ps(edgeAy_.data() + e));
-    const __m128 wz = _mm_sub_ps(pz, _mm_loadu_ps(edgeAz_.data() + e));
-    const __m128 dx = _mm_loadu_ps(edgeDx_.data() + e);
-    const __m128 dy = _mm_loadu_ps(edgeDy_.data() + e);
-    const __m128 dz = _mm_loadu_ps(edgeDz_.data() + e);
-    const __m128 along =
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(wx, dx), _mm_mul_ps(wy, dy)), _mm_mul_ps(wz, dz));
-    const __m128 s =
-        _mm_min_ps(_mm_max_ps(_mm_mul_ps(along, _mm_loadu_ps(edgeInvLen2_.data() + e)), zero), one);
-    const __m128 ex = _mm_sub_ps(wx, _mm_mul_ps(s, dx));
-    const __m128 ey = _mm_sub_ps(wy, _mm_mul_ps(s, dy));
-    const __m128 ez = _mm_sub_ps(wz, _mm_mul_ps(s, dz));
-    const __m128 d2 =
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ex), _mm_mul_ps(ey, ey)), _mm_mul_ps(ez, ez));
-    const __m128 closer = _mm_cmplt_ps(d2, bestV);
-    bestV = _mm_min_ps(d2, bestV);
-    const __m128i m = _mm_castps_si128(closer);
-    indexV = _mm_or_si128(_mm_and_si128(m, lane), _mm_andnot_si128(m, indexV));
-    lane = _mm_add_epi32(lane, four);
-  }
-  _mm_store_ps(best, bestV);
-  _mm_store_si128(reinterpret_cast<__m128i*>(index), indexV);
-#else
-  for (int k = 0; k < 4; ++k) {
-    best[k] = std::numeric_limits<float>::infinity();
-    index[k] = 0;
-  }
-  for (std::size_t e = 0; e < n; e += 4) {
-    for (std::size_t k = 0; k < 4; ++k) {
-      const std::size_t i = e + k;
-      const float wx = p.x() - edgeAx_[i], wy = p.y() - edgeAy_[i], wz = p.z() - edgeAz_[i];
-      const float along = (wx * edgeDx_[i] + wy * edgeDy_[i]) + wz * edgeDz_[i];
-      const float s = std::min(std::max(along * edgeInvLen2_[i], 0.0f), 1.0f);
-      const float ex = wx - s * edgeDx_[i], ey = wy - s * edgeDy_[i], ez = wz - s * edgeDz_[i];
-      const float d2 = (ex * ex + ey * ey) + ez * ez;
-      if (d2 < best[k]) {
-        best[k] = d2;
-        index[k] = static_cast<std::int32_t>(i);
-      }
-    }
-  }
-#endif
+  float best[simd::kLanes];
+  std::int32_t index[simd::kLanes];
+  DYNAHAND_SIMD_DISPATCH(nearestEdgeLanes, edgeAx_.data(), edgeAy_.data(), edgeAz_.data(),
+                         edgeDx_.data(), edgeDy_.data(), edgeDz_.data(), edgeInvLen2_.data(), n, p,
+                         best, index);
   int which = index[0];
   float result = best[0];
-  for (int k = 1; k < 4; ++k) {
+  for (int k = 1; k < simd::kLanes; ++k) {
     if (best[k] < result || (best[k] == result && index[k] < which)) {
       result = best[k];
       which = index[k];
@@ -425,36 +370,19 @@ int ConvexShape::closestFace(const Vec3& p) const {
 }
 
 Vec3 ConvexShape::support(const Vec3& direction) const {
-  // The first vertex of the largest dot product (Eigen's dot: x + (y + z)). Four vertices per
+  // The first vertex of the largest dot product (Eigen's dot: x + (y + z)). Eight vertices per
   // step, each lane keeping its own first largest; then the largest of the lanes, the earliest
   // among equal ones, and the rest one by one: the same vertex as one by one. (Below eight
   // vertices the lanes' reduction costs what it saves.)
   const std::size_t n = vertices_.size();
   std::size_t best = 0, i = 0;
   float bestDot = -std::numeric_limits<float>::infinity();
-#if defined(__SSE2__)
   if (n >= 8) {
-    const __m128 dx = _mm_set1_ps(direction.x()), dy = _mm_set1_ps(direction.y()),
-                 dz = _mm_set1_ps(direction.z());
-    __m128 bestV = _mm_set1_ps(bestDot);
-    __m128i indexV = _mm_setzero_si128();
-    __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
-    const __m128i four = _mm_set1_epi32(4);
-    for (; i + 4 <= n; i += 4) {
-      const __m128 h = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(vertexX_.data() + i), dx),
-                                  _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(vertexY_.data() + i), dy),
-                                             _mm_mul_ps(_mm_loadu_ps(vertexZ_.data() + i), dz)));
-      const __m128 larger = _mm_cmpgt_ps(h, bestV);
-      bestV = _mm_or_ps(_mm_and_ps(larger, h), _mm_andnot_ps(larger, bestV));
-      const __m128i take = _mm_castps_si128(larger);
-      indexV = _mm_or_si128(_mm_and_si128(take, lane), _mm_andnot_si128(take, indexV));
-      lane = _mm_add_epi32(lane, four);
-    }
-    alignas(16) float value[4];
-    alignas(16) std::int32_t index[4];
-    _mm_store_ps(value, bestV);
-    _mm_store_si128(reinterpret_cast<__m128i*>(index), indexV);
-    for (int k = 0; k < 4; ++k) {
+    float value[simd::kLanes];
+    std::int32_t index[simd::kLanes];
+    DYNAHAND_SIMD_DISPATCH(supportLanes, vertexX_.data(), vertexY_.data(), vertexZ_.data(), n,
+                           direction, bestDot, value, index, &i);
+    for (int k = 0; k < simd::kLanes; ++k) {
       const auto at = static_cast<std::size_t>(index[k]);
       if (value[k] > bestDot || (value[k] == bestDot && at < best)) {
         bestDot = value[k];
@@ -462,7 +390,6 @@ Vec3 ConvexShape::support(const Vec3& direction) const {
       }
     }
   }
-#endif
   for (; i < n; ++i) {
     const float d = vertices_[i].dot(direction);
     if (d > bestDot) {

@@ -39,6 +39,8 @@ inline void applyOps(const float* a, const float* b, const std::int32_t* i, cons
   putFloat(fa * fb);
   putFloat(fa / fb);
   putFloat(abs(fa));
+  putFloat(min(fa, fb));
+  putFloat(max(fa, fb));
   putFloat(toFloat(ia));
   putInt(truncate(fa));
   putInt(ia + ib);

@@ -24,6 +24,8 @@ constexpr const char* kOpNames[] = {"a + b",
                                     "a * b",
                                     "a / b",
                                     "abs(a)",
+                                    "min(a, b)",
+                                    "max(a, b)",
                                     "toFloat(i)",
                                     "truncate(a)",
                                     "i + j",
@@ -119,7 +121,7 @@ TEST(SimdLanes, TheScalarLevelFollowsTheX86Rules) {
   const std::int32_t j[8] = {1, 1, 65536, -4, 4, 0, 7, 7};
   const Results r = run(simd::Level::Scalar, a, b, i, j);
   simd::forceLevel(simd::bestLevel());
-  const int truncateOp = 6, addOp = 7, subOp = 8, mulOp = 9;
+  const int truncateOp = 8, addOp = 9, subOp = 10, mulOp = 11;
   const auto asInt = [](std::uint32_t x) { return static_cast<std::int32_t>(x); };
   EXPECT_EQ(asInt(r.lanes[truncateOp][0]), INT32_MIN);  // out of range
   EXPECT_EQ(asInt(r.lanes[truncateOp][1]), INT32_MIN);
@@ -130,6 +132,10 @@ TEST(SimdLanes, TheScalarLevelFollowsTheX86Rules) {
   EXPECT_EQ(asInt(r.lanes[subOp][1]), INT32_MAX);
   EXPECT_EQ(asInt(r.lanes[mulOp][2]), 0);  // 2^32: the low 32 bits
   EXPECT_EQ(asInt(r.lanes[mulOp][3]), -12);
+  const int minOp = 5, maxOp = 6;  // x86's order: b where a is NaN, b of two zeros
+  EXPECT_TRUE(std::isnan(std::bit_cast<float>(r.lanes[minOp][2])) == false);
+  EXPECT_EQ(r.lanes[minOp][5], std::bit_cast<std::uint32_t>(0.0f));  // min(-0, +0) = +0
+  EXPECT_EQ(r.lanes[maxOp][5], std::bit_cast<std::uint32_t>(0.0f));
 }
 
 TEST(SimdLanes, ForcingALevelTheCpuLacksGivesTheBestOne) {

@@ -100,6 +100,18 @@ DYNAHAND_SIMD_INLINE FloatW abs(FloatW a) {
     r.lane[i] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(a.lane[i]) & 0x7fffffffu);
   return r;
 }
+// x86's minimum and maximum: a < b ? a : b and a > b ? a : b (so b where either is NaN, and
+// b of two zeros), not std::min's order.
+DYNAHAND_SIMD_INLINE FloatW min(FloatW a, FloatW b) {
+  FloatW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = a.lane[i] < b.lane[i] ? a.lane[i] : b.lane[i];
+  return r;
+}
+DYNAHAND_SIMD_INLINE FloatW max(FloatW a, FloatW b) {
+  FloatW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = a.lane[i] > b.lane[i] ? a.lane[i] : b.lane[i];
+  return r;
+}
 DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
   FloatW r;
   for (int i = 0; i < kLanes; ++i) r.lane[i] = static_cast<float>(a.lane[i]);
@@ -218,6 +230,12 @@ DYNAHAND_SIMD_INLINE FloatW abs(FloatW a) {
   const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
   return {_mm_and_ps(a.lo, magnitude), _mm_and_ps(a.hi, magnitude)};
 }
+DYNAHAND_SIMD_INLINE FloatW min(FloatW a, FloatW b) {
+  return {_mm_min_ps(a.lo, b.lo), _mm_min_ps(a.hi, b.hi)};
+}
+DYNAHAND_SIMD_INLINE FloatW max(FloatW a, FloatW b) {
+  return {_mm_max_ps(a.lo, b.lo), _mm_max_ps(a.hi, b.hi)};
+}
 DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
   return {_mm_cvtepi32_ps(a.lo), _mm_cvtepi32_ps(a.hi)};
 }
@@ -316,6 +334,12 @@ DYNAHAND_SIMD_INLINE IntW mulLow(IntW a, IntW b) {
 }
 DYNAHAND_SIMD_INLINE FloatW abs(FloatW a) {
   return {_mm256_and_ps(a.v, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)))};
+}
+DYNAHAND_SIMD_INLINE FloatW min(FloatW a, FloatW b) {
+  return {_mm256_min_ps(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE FloatW max(FloatW a, FloatW b) {
+  return {_mm256_max_ps(a.v, b.v)};
 }
 DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
   return {_mm256_cvtepi32_ps(a.v)};

@@ -8,7 +8,8 @@ namespace dynahand::physics {
 // World::step prepares the surface rows eight at a time (the SIMD layer, default on) or one
 // at a time.
 bool useWideSurfacePrepare(bool enabled);
-// World::step solves the surface rows eight at a time with AVX (default on).
+// World::step solves the surface rows a batch of eight at a time (the SIMD layer above its
+// scalar level, default on) or row by row.
 bool useVectorSweeps(bool enabled);
 
 }  // namespace dynahand::physics

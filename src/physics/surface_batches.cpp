@@ -1,18 +1,13 @@
 #include "physics/surface_batches.h"
 
-#include "core/cpu_features.h"
-#include "physics/world_impl.h"
-
 #include <algorithm>
 #include <atomic>
 #include <cassert>
 #include <cstddef>
 #include <numeric>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define DYNAHAND_SWEEP_AVX 1
-#endif
+#include "core/simd/lanes.h"
+#include "physics/world_impl.h"
 
 namespace dynahand::physics {
 namespace {
@@ -36,12 +31,6 @@ void SurfaceBatches::reserve(int rows) {
 }
 
 namespace {
-#if defined(DYNAHAND_SWEEP_AVX)
-const bool kHasAvx = cpuHasAvx();
-#else
-constexpr bool kHasAvx = false;
-#endif
-
 // A batch's fields from its eight rows (padding lanes: an all-zero row) and the lanes'
 // copies (1 for an unsplit slot): a copy holds 1/copies of its slot's mass, so inverse
 // inertia times copies and effective mass over copies (exactly the row's own values for
@@ -69,59 +58,39 @@ void fillBatch(Batch& b, const PreparedSurfaceRow* const* rows, const float* cop
   }
 }
 
-#if defined(DYNAHAND_SWEEP_AVX)
-// r[k] = eight floats of row k -> r[f] = float f of the eight rows.
-__attribute__((target("avx"), always_inline)) inline void transpose8(__m256 (&r)[8]) {
-  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
-  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
-  const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
-  const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
-  const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xEE);
-  const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xEE);
-  const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xEE);
-  const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xEE);
-  r[0] = _mm256_permute2f128_ps(s0, s4, 0x20);
-  r[1] = _mm256_permute2f128_ps(s1, s5, 0x20);
-  r[2] = _mm256_permute2f128_ps(s2, s6, 0x20);
-  r[3] = _mm256_permute2f128_ps(s3, s7, 0x20);
-  r[4] = _mm256_permute2f128_ps(s0, s4, 0x31);
-  r[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
-  r[6] = _mm256_permute2f128_ps(s2, s6, 0x31);
-  r[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
-}
+}  // namespace
 
-// fillBatch with two 8x8 transposes: a row's fourteen floats (normal ... upper, bytes 4-60)
-// are read as floats 0-7 and 6-13. The same operations per value, so the same bits.
-template <class Batch>
-__attribute__((target("avx"))) void fillBatchAvx(Batch& b, const PreparedSurfaceRow* const* rows,
-                                                 const float* copies) {
-  static_assert(sizeof(PreparedSurfaceRow) == 60, "slot, then fourteen floats");
-  __m256 first[8], second[8];
-  for (int k = 0; k < 8; ++k) {
-    const float* f = reinterpret_cast<const float*>(rows[k]) + 1;
-    first[k] = _mm256_loadu_ps(f);
-    second[k] = _mm256_loadu_ps(f + 6);
+// The sweeps' access to SurfaceBatches (a friend), for the kernels of surface_sweeps.inl.
+struct SurfaceSweeps {
+  using Batch = SurfaceBatches::Batch;
+  static std::vector<Batch>& batches(SurfaceBatches& s) { return s.batches_; }
+  static const std::vector<SurfaceBatches::BatchLanes>& lanes(const SurfaceBatches& s) {
+    return s.lanes_;
   }
-  transpose8(first);
-  transpose8(second);
-  const __m256 c = _mm256_loadu_ps(copies);
-  _mm256_store_ps(b.nx, first[0]);
-  _mm256_store_ps(b.ny, first[1]);
-  _mm256_store_ps(b.nz, first[2]);
-  _mm256_store_ps(b.ax, first[3]);
-  _mm256_store_ps(b.ay, first[4]);
-  _mm256_store_ps(b.az, first[5]);
-  _mm256_store_ps(b.ix, _mm256_mul_ps(second[0], c));
-  _mm256_store_ps(b.iy, _mm256_mul_ps(second[1], c));
-  _mm256_store_ps(b.iz, _mm256_mul_ps(second[2], c));
-  _mm256_store_ps(b.effMass, _mm256_div_ps(second[3], c));
-  _mm256_store_ps(b.bias, second[4]);
-  _mm256_store_ps(b.relaxBias, second[5]);
-  _mm256_store_ps(b.lower, second[6]);
-  _mm256_store_ps(b.upper, second[7]);
-  _mm256_store_ps(b.impulse, _mm256_setzero_ps());
+  static const std::vector<unsigned char>& changed(const SurfaceBatches& s) { return s.changed_; }
+  static const std::vector<float>& massScale(const SurfaceBatches& s) { return s.massScale_; }
+  static SolverBody* laneBody(SurfaceBatches& s, std::vector<SolverBody>& bodies, int slot) {
+    return s.laneBody(bodies, slot);
+  }
+  static void beginCopies(SurfaceBatches& s, const std::vector<SolverBody>& bodies) {
+    s.beginCopies(bodies);
+  }
+  static void endCopies(const SurfaceBatches& s, std::vector<SolverBody>& bodies) {
+    s.endCopies(bodies);
+  }
+};
+
+namespace {
+#define DYNAHAND_SIMD_KERNELS "physics/surface_sweeps.inl"
+#include "core/simd/for_each_level.inl"
+
+std::atomic<bool> vectorSweeps{true};  // useVectorSweeps (kernel_paths.h)
+
+// The sweeps run one batch (eight rows) at a time on the SIMD layer's widest level but the
+// scalar one, where they run row by row (solveFallback).
+bool sweepsInLanes() {
+  return simd::level() != simd::Level::Scalar && vectorSweeps.load(std::memory_order_relaxed);
 }
-#endif
 }  // namespace
 
 void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
@@ -285,14 +254,12 @@ void SurfaceBatches::fillBatches(const std::vector<PreparedSurfaceRow>& rows, in
       source[lane] = r;
       copies[lane] = i >= 0 ? massScale_[static_cast<std::size_t>(l.slot[lane])] : 1.0f;
     }
-#if defined(DYNAHAND_SWEEP_AVX)
-    // Filled with AVX only when the sweep runs with it: the tests' switch turns off both.
-    if (canSolveSideBySide()) {
-      fillBatchAvx(batches_[static_cast<std::size_t>(batch)], source, copies);
-      continue;
-    }
-#endif
-    fillBatch(batches_[static_cast<std::size_t>(batch)], source, copies);
+    // Filled in lanes only when the sweeps run in them: the tests' switch turns off both.
+    if (sweepsInLanes())
+      DYNAHAND_SIMD_DISPATCH(fillBatchLanes, batches_[static_cast<std::size_t>(batch)], source,
+                             copies);
+    else
+      fillBatch(batches_[static_cast<std::size_t>(batch)], source, copies);
   }
   changed_.assign(static_cast<std::size_t>(batchCount), 0);
   for (std::size_t i = 1; i < batches_.size(); ++i)
@@ -358,206 +325,13 @@ void SurfaceBatches::solveFallback(std::vector<SolverBody>& bodies, bool useBias
   endCopies(bodies);
 }
 
-#if defined(DYNAHAND_SWEEP_AVX)
-namespace {
-
-// The bodies of a sweep's eight lanes, their velocities in registers. A lane changes body
-// only where its column moves to the next slot (about one lane every sixth batch, rarely
-// several at once), so lanes are written back and loaded one by one.
-struct alignas(32) EightBodies {
-  __m256 vx, vy, vz, wx, wy, wz;
-  __m256 pull;  // the body's inverse mass x the lane's massScale_ (the normal's factor)
-
-  // Lanes in `lanes` (a bit mask) write their velocities back to their bodies p[k].
-  __attribute__((target("avx"), always_inline)) inline void writeBack(
-      unsigned lanes, SolverBody* const p[8]) const {
-    alignas(32) float t[6][8];
-    _mm256_store_ps(t[0], vx);
-    _mm256_store_ps(t[1], vy);
-    _mm256_store_ps(t[2], vz);
-    _mm256_store_ps(t[3], wx);
-    _mm256_store_ps(t[4], wy);
-    _mm256_store_ps(t[5], wz);
-    for (; lanes != 0; lanes &= lanes - 1) {
-      const int k = __builtin_ctz(lanes);
-      SolverBody& body = *p[k];
-      body.v = Vec3(t[0][k], t[1][k], t[2][k]);
-      body.w = Vec3(t[3][k], t[4][k], t[5][k]);
-    }
-  }
-  // Lane k takes `body`, whose rows pull with `scale` times its inverse mass.
-  __attribute__((target("avx"), always_inline)) inline void loadLane(int k, const SolverBody& body,
-                                                                     float scale) {
-    alignas(32) static constexpr int kLaneMask[8][8] = {
-        {-1, 0, 0, 0, 0, 0, 0, 0}, {0, -1, 0, 0, 0, 0, 0, 0}, {0, 0, -1, 0, 0, 0, 0, 0},
-        {0, 0, 0, -1, 0, 0, 0, 0}, {0, 0, 0, 0, -1, 0, 0, 0}, {0, 0, 0, 0, 0, -1, 0, 0},
-        {0, 0, 0, 0, 0, 0, -1, 0}, {0, 0, 0, 0, 0, 0, 0, -1}};
-    const __m256 m = _mm256_load_ps(reinterpret_cast<const float*>(kLaneMask[k]));
-    vx = _mm256_blendv_ps(vx, _mm256_broadcast_ss(&body.v.x()), m);
-    vy = _mm256_blendv_ps(vy, _mm256_broadcast_ss(&body.v.y()), m);
-    vz = _mm256_blendv_ps(vz, _mm256_broadcast_ss(&body.v.z()), m);
-    wx = _mm256_blendv_ps(wx, _mm256_broadcast_ss(&body.w.x()), m);
-    wy = _mm256_blendv_ps(wy, _mm256_broadcast_ss(&body.w.y()), m);
-    wz = _mm256_blendv_ps(wz, _mm256_broadcast_ss(&body.w.z()), m);
-    pull = _mm256_blendv_ps(pull, _mm256_set1_ps(body.invMass * scale), m);
-  }
-};
-
-// One batch's rows, lane for lane the fallback's arithmetic (a template only so that it
-// need not name the private batch type). The chain through a body's velocity is the row
-// arithmetic alone; the clamp's target is formed off that chain.
-template <class Batch>
-__attribute__((target("avx"), always_inline)) inline void solveBatch(Batch& b, EightBodies& lane,
-                                                                     bool useBias) {
-  const __m256 effMass = _mm256_load_ps(b.effMass);
-  const __m256 old = _mm256_load_ps(b.impulse);
-  const __m256 base =
-      _mm256_sub_ps(old, _mm256_mul_ps(effMass, _mm256_load_ps(useBias ? b.bias : b.relaxBias)));
-  const __m256 jv =
-      _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_load_ps(b.nx), lane.vx),
-                                                _mm256_mul_ps(_mm256_load_ps(b.ny), lane.vy)),
-                                  _mm256_mul_ps(_mm256_load_ps(b.nz), lane.vz)),
-                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_load_ps(b.ax), lane.wx),
-                                                _mm256_mul_ps(_mm256_load_ps(b.ay), lane.wy)),
-                                  _mm256_mul_ps(_mm256_load_ps(b.az), lane.wz)));
-  const __m256 clamped = _mm256_min_ps(
-      _mm256_max_ps(_mm256_sub_ps(base, _mm256_mul_ps(effMass, jv)), _mm256_load_ps(b.lower)),
-      _mm256_load_ps(b.upper));
-  _mm256_store_ps(b.impulse, clamped);
-  const __m256 d = _mm256_sub_ps(clamped, old);
-  lane.vx =
-      _mm256_add_ps(lane.vx, _mm256_mul_ps(d, _mm256_mul_ps(_mm256_load_ps(b.nx), lane.pull)));
-  lane.vy =
-      _mm256_add_ps(lane.vy, _mm256_mul_ps(d, _mm256_mul_ps(_mm256_load_ps(b.ny), lane.pull)));
-  lane.vz =
-      _mm256_add_ps(lane.vz, _mm256_mul_ps(d, _mm256_mul_ps(_mm256_load_ps(b.nz), lane.pull)));
-  lane.wx = _mm256_add_ps(lane.wx, _mm256_mul_ps(d, _mm256_load_ps(b.ix)));
-  lane.wy = _mm256_add_ps(lane.wy, _mm256_mul_ps(d, _mm256_load_ps(b.iy)));
-  lane.wz = _mm256_add_ps(lane.wz, _mm256_mul_ps(d, _mm256_load_ps(b.iz)));
-}
-}  // namespace
-
-// The sweeps of up to four worlds side by side. Each world's lanes take six vector registers:
-// four worlds need twenty-four, which AVX-512VL has (thirty-two; the loop is compiled for it
-// too: the same operations, so the same bits, and contraction into FMA is off in every
-// build). AVX's sixteen hold two worlds' lanes, though not without spills that land on the
-// velocity chains, so without AVX-512VL the worlds go two by two.
-struct SurfaceSweeps {
-  using Batch = SurfaceBatches::Batch;
-  static constexpr int kLanes = SurfaceBatches::kLanes;
-
-  // Lanes `lanes` (a bit mask) of batch i take their bodies (p: where they are).
-  __attribute__((target("avx"), always_inline)) static inline void load(
-      SurfaceBatches& sweep, std::vector<SolverBody>& bodies, std::size_t i, unsigned lanes,
-      SolverBody* p[kLanes], EightBodies& lane) {
-    for (; lanes != 0; lanes &= lanes - 1) {
-      const int k = __builtin_ctz(lanes);
-      const int slot = sweep.lanes_[i].slot[k];
-      p[k] = sweep.laneBody(bodies, slot);
-      lane.loadLane(k, *p[k], sweep.massScale_[static_cast<std::size_t>(slot)]);
-    }
-  }
-
-  // Batches [from, to) of the first M sweeps (each has them). Each lane runs down its
-  // column, mostly on one slot for many batches in a row: its body stays in registers until
-  // the lane moves to another slot, and until `to`.
-  template <int M>
-  __attribute__((target("avx"), always_inline)) static inline void phase(
-      SurfaceBatches* const* sweeps, std::vector<SolverBody>* const* bodies, std::size_t from,
-      std::size_t to, bool useBias) {
-    constexpr unsigned kAll = (1u << kLanes) - 1;
-    SolverBody* p[M][kLanes];
-    EightBodies lane[M];
-#pragma GCC unroll 4
-    for (int w = 0; w < M; ++w) {
-      lane[w].vx = lane[w].vy = lane[w].vz = lane[w].wx = lane[w].wy = lane[w].wz = lane[w].pull =
-          _mm256_setzero_ps();
-      load(*sweeps[w], *bodies[w], from, kAll, p[w], lane[w]);
-    }
-    for (std::size_t i = from; i < to; ++i) {
-#pragma GCC unroll 4
-      for (int w = 0; w < M; ++w) {
-        const unsigned changed = sweeps[w]->changed_[i];
-        if (i == from || changed == 0) continue;
-        // Every leaving body is written back before any arriving one is read: a slot can
-        // leave one lane and enter another at the same batch.
-        lane[w].writeBack(changed, p[w]);
-        load(*sweeps[w], *bodies[w], i, changed, p[w], lane[w]);
-      }
-#pragma GCC unroll 4
-      for (int w = 0; w < M; ++w) solveBatch(sweeps[w]->batches_[i], lane[w], useBias);
-    }
-#pragma GCC unroll 4
-    for (int w = 0; w < M; ++w) lane[w].writeBack(kAll, p[w]);
-  }
-
-  // Every batch of the given sweeps (at most four, none empty): all of them side by side
-  // while each has batches left, then the longer ones on.
-  __attribute__((target("avx"), always_inline)) static inline void run(
-      std::span<SurfaceBatches* const> given, std::span<std::vector<SolverBody>* const> givenBodies,
-      bool useBias) {
-    const std::size_t n = given.size();
-    SurfaceBatches* sweeps[4];
-    std::vector<SolverBody>* bodies[4];
-    for (std::size_t w = 0; w < n; ++w) {  // by decreasing batch count (insertion sort)
-      std::size_t j = w;
-      for (; j > 0 && sweeps[j - 1]->batches_.size() < given[w]->batches_.size(); --j) {
-        sweeps[j] = sweeps[j - 1];
-        bodies[j] = bodies[j - 1];
-      }
-      sweeps[j] = given[w];
-      bodies[j] = givenBodies[w];
-    }
-    for (std::size_t w = 0; w < n; ++w) sweeps[w]->beginCopies(*bodies[w]);
-    std::size_t from = 0;
-    for (std::size_t m = n; m > 0; --m) {  // the m longest sweeps still have batches
-      const std::size_t to = sweeps[m - 1]->batches_.size();
-      if (from < to) {
-        switch (m) {
-          case 4:
-            phase<4>(sweeps, bodies, from, to, useBias);
-            break;
-          case 3:
-            phase<3>(sweeps, bodies, from, to, useBias);
-            break;
-          case 2:
-            phase<2>(sweeps, bodies, from, to, useBias);
-            break;
-          default:
-            phase<1>(sweeps, bodies, from, to, useBias);
-            break;
-        }
-        from = to;
-      }
-    }
-    for (std::size_t w = 0; w < n; ++w) sweeps[w]->endCopies(*bodies[w]);
-  }
-};
-
-namespace {
-const bool kHasAvx512vl = cpuHasAvx512vl();
-
-__attribute__((target("avx"))) void runAvx(std::span<SurfaceBatches* const> sweeps,
-                                           std::span<std::vector<SolverBody>* const> bodies,
-                                           bool useBias) {
-  SurfaceSweeps::run(sweeps, bodies, useBias);
-}
-
-__attribute__((target("avx512f,avx512vl"))) void runAvx512(
-    std::span<SurfaceBatches* const> sweeps, std::span<std::vector<SolverBody>* const> bodies,
-    bool useBias) {
-  SurfaceSweeps::run(sweeps, bodies, useBias);
-}
-std::atomic<bool> vectorSweeps{true};  // useVectorSweeps (kernel_paths.h)
-}  // namespace
-
 bool SurfaceBatches::canSolveSideBySide() {
-  return kHasAvx && vectorSweeps.load(std::memory_order_relaxed);
+  return sweepsInLanes();
 }
 
 bool SurfaceBatches::useVectorSweeps(bool enabled) {
-  vectorSweeps.store(enabled && kHasAvx);
-  return vectorSweeps.load();
+  vectorSweeps.store(enabled);
+  return sweepsInLanes();
 }
 
 void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
@@ -570,21 +344,21 @@ void SurfaceBatches::solveSideBySide(std::span<SurfaceBatches* const> sweeps,
                                      std::span<std::vector<SolverBody>* const> bodies,
                                      bool useBias) {
   assert(sweeps.size() == bodies.size());
-  if (!canSolveSideBySide()) {
+  if (!sweepsInLanes()) {
     for (std::size_t w = 0; w < sweeps.size(); ++w) sweeps[w]->solveFallback(*bodies[w], useBias);
     return;
   }
-  // The sweeps with batches, `group` at a time.
-  const std::size_t group = kHasAvx512vl ? 4 : 2;
+  // The sweeps with batches, `group` at a time: each world's lanes take seven vector
+  // registers, so four worlds fit AVX-512's thirty-two, two AVX2's sixteen (not without
+  // spills that land on the velocity chains), one SSE2's sixteen half-width ones.
+  const simd::Level level = simd::level();
+  const std::size_t group = level == simd::Level::Avx512 ? 4 : level == simd::Level::Avx2 ? 2 : 1;
   SurfaceBatches* chosen[4];
   std::vector<SolverBody>* chosenBodies[4];
   std::size_t count = 0;
   auto flush = [&] {
     if (count == 0) return;
-    if (kHasAvx512vl)
-      runAvx512({chosen, count}, {chosenBodies, count}, useBias);
-    else
-      runAvx({chosen, count}, {chosenBodies, count}, useBias);
+    DYNAHAND_SIMD_DISPATCH(sweepSideBySide, chosen, chosenBodies, count, useBias);
     count = 0;
   };
   for (std::size_t w = 0; w < sweeps.size(); ++w) {
@@ -595,24 +369,5 @@ void SurfaceBatches::solveSideBySide(std::span<SurfaceBatches* const> sweeps,
   }
   flush();
 }
-#else
-bool SurfaceBatches::canSolveSideBySide() {
-  return false;
-}
-
-bool SurfaceBatches::useVectorSweeps(bool) {
-  return false;
-}
-
-void SurfaceBatches::solve(std::vector<SolverBody>& bodies, bool useBias) {
-  solveFallback(bodies, useBias);
-}
-
-void SurfaceBatches::solveSideBySide(std::span<SurfaceBatches* const> sweeps,
-                                     std::span<std::vector<SolverBody>* const> bodies,
-                                     bool useBias) {
-  for (std::size_t w = 0; w < sweeps.size(); ++w) sweeps[w]->solve(*bodies[w], useBias);
-}
-#endif
 
 }  // namespace dynahand::physics

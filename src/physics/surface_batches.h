@@ -1,13 +1,13 @@
 // Surface rows (one body each, the tracker's thousands of point-on-plane constraints) packed
-// eight to a batch, the eight on different solver slots, and solved eight at a time with AVX
-// (without it, one at a time). Within a batch the rows touch different bodies, so solving them
-// together is the same as solving them one after another: still projected Gauss-Seidel.
-// Since every row moves one body only, a sweep's result depends on nothing but each slot's
-// order of its rows; the batches only schedule the slots' chains side by side. A slot
-// holding more than a quarter of the rows, and at least 32 (a welded hand: all of them),
-// would be one long chain; its rows are instead spread over several copies of the slot,
-// each with that share of its mass, whose velocities are averaged after every sweep (mass
-// splitting, Tonge et al. 2012).
+// eight to a batch, the eight on different solver slots, and solved a batch at a time (the SIMD
+// layer's kernel surface_sweeps.inl; row by row on its scalar level). Within a batch the rows touch
+// different bodies, so solving them together is the same as solving them one after another: still
+// projected Gauss-Seidel. Since every row moves one body only, a sweep's result depends on nothing
+// but each slot's order of its rows; the batches only schedule the slots' chains side by side. A
+// slot holding more than a quarter of the rows, and at least 32 (a welded hand: all of them), would
+// be one long chain; its rows are instead spread over several copies of the slot, each with that
+// share of its mass, whose velocities are averaged after every sweep (mass splitting, Tonge et al.
+// 2012).
 #pragma once
 
 #include <span>
@@ -36,13 +36,13 @@ class SurfaceBatches {
   // One sweep over every row, with the position bias (solve) or the relax bias.
   void solve(std::vector<SolverBody>& bodies, bool useBias);
   // sweeps[i]->solve(*bodies[i], useBias) for each i (of different worlds), side by side,
-  // batch by batch, up to four at a time with AVX-512VL (two with AVX alone, whose sixteen
-  // registers hold two worlds' lanes): each lane does exactly what solve() does, so the
-  // same bits, but the sweeps' latency chains overlap.
+  // batch by batch, up to four at a time on the AVX-512 level (two on AVX2, whose sixteen
+  // registers hold two worlds' lanes; one on SSE2): each lane does exactly what solve() does,
+  // so the same bits, but the sweeps' latency chains overlap.
   static void solveSideBySide(std::span<SurfaceBatches* const> sweeps,
                               std::span<std::vector<SolverBody>* const> bodies, bool useBias);
-  // Whether solveSideBySide overlaps the sweeps here (the CPU has AVX and the vector sweeps
-  // are on); otherwise it solves one after the other.
+  // Whether solveSideBySide overlaps the sweeps here (the SIMD level is above scalar and the
+  // vector sweeps are on); otherwise it solves one after the other, row by row.
   static bool canSolveSideBySide();
   // Switches the vector sweeps (useVectorSweeps, kernel_paths.h); returns whether they are now on.
   static bool useVectorSweeps(bool enabled);
@@ -60,7 +60,7 @@ class SurfaceBatches {
   int groupRowsBySlot(int n, std::size_t slots);
   int dealIntoTable(int n, int largest);
   void fillBatches(const std::vector<PreparedSurfaceRow>& rows, int batchCount, int dummySlot);
-  friend struct SurfaceSweeps;  // the sweeps' loops (surface_batches.cpp)
+  friend struct SurfaceSweeps;  // the sweeps' kernels' access (surface_batches.cpp)
   static constexpr int kLanes = 8;
   // A batch: what the sweeps read, two fields to a cache line (relaxBias last: only the relax
   // sweeps read it). The sweeps are bound by how fast these stream in from the second-level

@@ -58,4 +58,15 @@ inline void applyOps(const float* a, const float* b, const std::int32_t* i, cons
   putFloat(splat(a[3]));
   for (int lane = 0; lane < kLanes; ++lane) out[op][lane] = all(fa <= fa) ? 1u : 0u;
   ++op;
+  putMask(ia == ib);
+  putMask(ia == ia);
+  putMask(laneMask(i[0] & 7));
+}
+
+// rows[k][f] -> out[f][k] through transpose8.
+inline void transposeRows(const float (*rows)[8], float (*out)[8]) {
+  FloatW r[kLanes];
+  for (int k = 0; k < kLanes; ++k) r[k] = load(rows[k]);
+  transpose8(r);
+  for (int f = 0; f < kLanes; ++f) store(out[f], r[f]);
 }

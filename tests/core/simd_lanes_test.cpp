@@ -41,7 +41,10 @@ constexpr const char* kOpNames[] = {"a + b",
                                     "select(a > b, a, b)",
                                     "iota()",
                                     "splat(a[3])",
-                                    "all(a <= a)"};
+                                    "all(a <= a)",
+                                    "i == j",
+                                    "i == i",
+                                    "laneMask(i[0] & 7)"};
 constexpr int kOps = static_cast<int>(std::size(kOpNames));
 
 struct Results {
@@ -138,6 +141,22 @@ TEST(SimdLanes, TheScalarLevelFollowsTheX86Rules) {
   EXPECT_EQ(r.lanes[maxOp][5], std::bit_cast<std::uint32_t>(0.0f));
 }
 
+TEST(SimdLanes, Transpose8SwapsRowsAndLanesOnEveryLevel) {
+  float rows[8][8];
+  for (int k = 0; k < 8; ++k)
+    for (int f = 0; f < 8; ++f) rows[k][f] = static_cast<float>(10 * k + f);
+  for (int l = 0; l <= static_cast<int>(simd::bestLevel()); ++l) {
+    const auto level = static_cast<simd::Level>(l);
+    ASSERT_EQ(simd::forceLevel(level), level);
+    float out[8][8] = {};
+    DYNAHAND_SIMD_DISPATCH(transposeRows, rows, out);
+    for (int k = 0; k < 8; ++k)
+      for (int f = 0; f < 8; ++f)
+        ASSERT_EQ(out[f][k], rows[k][f]) << simd::levelName(level) << " row " << k << " lane " << f;
+  }
+  simd::forceLevel(simd::bestLevel());
+}
+
 TEST(SimdLanes, ForcingALevelTheCpuLacksGivesTheBestOne) {
   EXPECT_EQ(simd::forceLevel(simd::Level::Scalar), simd::Level::Scalar);
   EXPECT_EQ(simd::level(), simd::Level::Scalar);
@@ -145,6 +164,7 @@ TEST(SimdLanes, ForcingALevelTheCpuLacksGivesTheBestOne) {
             static_cast<int>(simd::bestLevel()) >= static_cast<int>(simd::Level::Avx2)
                 ? simd::Level::Avx2
                 : simd::bestLevel());
+  EXPECT_EQ(simd::forceLevel(simd::Level::Avx512), simd::bestLevel());  // the widest level
   simd::forceLevel(simd::bestLevel());
   EXPECT_EQ(simd::level(), simd::bestLevel());
 }

@@ -1,7 +1,7 @@
 // Compiles the kernel file named by DYNAHAND_SIMD_KERNELS once per simd::Level, each build in
-// its own namespace (simd_scalar, simd_sse2, simd_avx2, inside the namespace this is included
-// from) that sees that level's FloatW, IntW, MaskW and operations (lanes.h); the AVX2 build is
-// compiled for AVX2. DYNAHAND_SIMD_DISPATCH (simd.h) calls the build for simd::level().
+// its own namespace (simd_scalar, simd_sse2, simd_avx2, simd_avx512, inside the namespace this
+// is included from) that sees that level's FloatW, IntW, MaskW and operations (lanes.h); the
+// AVX2 and AVX-512 builds are compiled for those. DYNAHAND_SIMD_DISPATCH (simd.h) calls the build for simd::level().
 //
 //   #define DYNAHAND_SIMD_KERNELS "track/finger_sampling.inl"
 //   #include "core/simd/for_each_level.inl"
@@ -32,6 +32,14 @@ using ::dynahand::simd::kLanes;
 using namespace ::dynahand::simd::avx2;
 #include DYNAHAND_SIMD_KERNELS
 }  // namespace simd_avx2
+DYNAHAND_SIMD_END
+
+DYNAHAND_SIMD_BEGIN_AVX512
+namespace simd_avx512 {
+using ::dynahand::simd::kLanes;
+using namespace ::dynahand::simd::avx512;
+#include DYNAHAND_SIMD_KERNELS
+}  // namespace simd_avx512
 DYNAHAND_SIMD_END
 #endif
 

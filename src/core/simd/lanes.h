@@ -1,6 +1,7 @@
 // The SIMD layer's eight-lane types and the few operations the kernels need, once per level
-// (simd.h): namespaces simd::scalar (plain C++, the reference), simd::sse2 (two 128-bit halves)
-// and simd::avx2 (one 256-bit register). Each level defines
+// (simd.h): namespaces simd::scalar (plain C++, the reference), simd::sse2 (two 128-bit halves),
+// simd::avx2 (one 256-bit register) and simd::avx512 (the same, compiled for AVX-512VL). Each
+// level defines
 //   FloatW  eight floats;   IntW  eight int32;   MaskW  eight booleans (a compare's result);
 // with the same functions and the same results bit for bit: IEEE single-precision arithmetic
 // lane by lane, int32 arithmetic wrapping modulo 2^32, x86's conversion rules (truncation of a
@@ -26,6 +27,12 @@
 namespace dynahand::simd {
 
 inline constexpr int kLanes = 8;
+
+// Row k: all ones in lane k, zeros elsewhere (laneMask).
+alignas(32) inline constexpr std::int32_t kLaneMaskTable[kLanes][kLanes] = {
+    {-1, 0, 0, 0, 0, 0, 0, 0}, {0, -1, 0, 0, 0, 0, 0, 0}, {0, 0, -1, 0, 0, 0, 0, 0},
+    {0, 0, 0, -1, 0, 0, 0, 0}, {0, 0, 0, 0, -1, 0, 0, 0}, {0, 0, 0, 0, 0, -1, 0, 0},
+    {0, 0, 0, 0, 0, 0, -1, 0}, {0, 0, 0, 0, 0, 0, 0, -1}};
 
 namespace scalar {
 
@@ -161,6 +168,24 @@ DYNAHAND_SIMD_INLINE FloatW select(MaskW m, FloatW a, FloatW b) {
   for (int i = 0; i < kLanes; ++i) r.lane[i] = ((m.bits >> i) & 1u) != 0 ? a.lane[i] : b.lane[i];
   return r;
 }
+// True in lane k (0-7) alone.
+DYNAHAND_SIMD_INLINE MaskW laneMask(int k) {
+  return {1u << k};
+}
+DYNAHAND_SIMD_INLINE MaskW operator==(IntW a, IntW b) {
+  unsigned bits = 0;
+  for (int i = 0; i < kLanes; ++i) bits |= static_cast<unsigned>(a.lane[i] == b.lane[i]) << i;
+  return {bits};
+}
+// r[k] = the eight lanes of row k -> r[f] = lane f of the eight rows (an 8 x 8 transpose).
+DYNAHAND_SIMD_INLINE void transpose8(FloatW (&r)[kLanes]) {
+  for (int i = 0; i < kLanes; ++i)
+    for (int j = i + 1; j < kLanes; ++j) {
+      const float t = r[i].lane[j];
+      r[i].lane[j] = r[j].lane[i];
+      r[j].lane[i] = t;
+    }
+}
 
 }  // namespace scalar
 
@@ -276,110 +301,41 @@ DYNAHAND_SIMD_INLINE FloatW select(MaskW m, FloatW a, FloatW b) {
   return {_mm_or_ps(_mm_and_ps(lo, a.lo), _mm_andnot_ps(lo, b.lo)),
           _mm_or_ps(_mm_and_ps(hi, a.hi), _mm_andnot_ps(hi, b.hi))};
 }
+DYNAHAND_SIMD_INLINE MaskW laneMask(int k) {
+  const auto* row = reinterpret_cast<const __m128i*>(kLaneMaskTable[k]);
+  return {_mm_load_si128(row), _mm_load_si128(row + 1)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator==(IntW a, IntW b) {
+  return {_mm_cmpeq_epi32(a.lo, b.lo), _mm_cmpeq_epi32(a.hi, b.hi)};
+}
+// Four 4 x 4 transposes: the quarters of the 8 x 8 block, the off-diagonal ones swapped.
+DYNAHAND_SIMD_INLINE void transpose8(FloatW (&r)[kLanes]) {
+  __m128 a0 = r[0].lo, a1 = r[1].lo, a2 = r[2].lo, a3 = r[3].lo;  // rows 0-3, lanes 0-3
+  __m128 b0 = r[4].lo, b1 = r[5].lo, b2 = r[6].lo, b3 = r[7].lo;  // rows 4-7, lanes 0-3
+  __m128 c0 = r[0].hi, c1 = r[1].hi, c2 = r[2].hi, c3 = r[3].hi;  // rows 0-3, lanes 4-7
+  __m128 d0 = r[4].hi, d1 = r[5].hi, d2 = r[6].hi, d3 = r[7].hi;  // rows 4-7, lanes 4-7
+  _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+  _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+  _MM_TRANSPOSE4_PS(c0, c1, c2, c3);
+  _MM_TRANSPOSE4_PS(d0, d1, d2, d3);
+  r[0] = {a0, b0}, r[1] = {a1, b1}, r[2] = {a2, b2}, r[3] = {a3, b3};
+  r[4] = {c0, d0}, r[5] = {c1, d1}, r[6] = {c2, d2}, r[7] = {c3, d3};
+}
 
 }  // namespace sse2
 
 DYNAHAND_SIMD_BEGIN_AVX2
-
 namespace avx2 {
-
-struct FloatW {
-  __m256 v;
-};
-struct IntW {
-  __m256i v;
-};
-struct MaskW {
-  __m256i v;  // all ones in a true lane
-};
-
-DYNAHAND_SIMD_INLINE FloatW splat(float x) {
-  return {_mm256_set1_ps(x)};
-}
-DYNAHAND_SIMD_INLINE IntW splat(std::int32_t x) {
-  return {_mm256_set1_epi32(x)};
-}
-DYNAHAND_SIMD_INLINE IntW iota() {
-  return {_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)};
-}
-DYNAHAND_SIMD_INLINE FloatW load(const float* p) {
-  return {_mm256_loadu_ps(p)};
-}
-DYNAHAND_SIMD_INLINE void store(float* p, FloatW a) {
-  _mm256_storeu_ps(p, a.v);
-}
-DYNAHAND_SIMD_INLINE void store(std::int32_t* p, IntW a) {
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), a.v);
-}
-DYNAHAND_SIMD_INLINE FloatW operator+(FloatW a, FloatW b) {
-  return {_mm256_add_ps(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE FloatW operator-(FloatW a, FloatW b) {
-  return {_mm256_sub_ps(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE FloatW operator*(FloatW a, FloatW b) {
-  return {_mm256_mul_ps(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE FloatW operator/(FloatW a, FloatW b) {
-  return {_mm256_div_ps(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE IntW operator+(IntW a, IntW b) {
-  return {_mm256_add_epi32(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE IntW operator-(IntW a, IntW b) {
-  return {_mm256_sub_epi32(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE IntW mulLow(IntW a, IntW b) {
-  return {_mm256_mullo_epi32(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE FloatW abs(FloatW a) {
-  return {_mm256_and_ps(a.v, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)))};
-}
-DYNAHAND_SIMD_INLINE FloatW min(FloatW a, FloatW b) {
-  return {_mm256_min_ps(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE FloatW max(FloatW a, FloatW b) {
-  return {_mm256_max_ps(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
-  return {_mm256_cvtepi32_ps(a.v)};
-}
-DYNAHAND_SIMD_INLINE IntW truncate(FloatW a) {
-  return {_mm256_cvttps_epi32(a.v)};
-}
-DYNAHAND_SIMD_INLINE MaskW operator<(FloatW a, FloatW b) {
-  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ))};
-}
-DYNAHAND_SIMD_INLINE MaskW operator<=(FloatW a, FloatW b) {
-  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ))};
-}
-DYNAHAND_SIMD_INLINE MaskW operator>(FloatW a, FloatW b) {
-  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ))};
-}
-DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
-  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ))};
-}
-DYNAHAND_SIMD_INLINE MaskW operator>(IntW a, IntW b) {
-  return {_mm256_cmpgt_epi32(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE MaskW operator&(MaskW a, MaskW b) {
-  return {_mm256_and_si256(a.v, b.v)};
-}
-DYNAHAND_SIMD_INLINE unsigned bits(MaskW m) {
-  return static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(m.v)));
-}
-DYNAHAND_SIMD_INLINE bool all(MaskW m) {
-  return bits(m) == 0xffu;
-}
-DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
-  return {_mm256_blendv_epi8(b.v, a.v, m.v)};
-}
-DYNAHAND_SIMD_INLINE FloatW select(MaskW m, FloatW a, FloatW b) {
-  return {_mm256_blendv_ps(b.v, a.v, _mm256_castsi256_ps(m.v))};
-}
-
+#include "core/simd/lanes_x86_256.inl"
 }  // namespace avx2
+DYNAHAND_SIMD_END
 
+// The same 256-bit lanes compiled for AVX-512VL: the compiler has 32 vector registers (loops
+// that keep many values in registers spill less) and the same instructions, so the same bits.
+DYNAHAND_SIMD_BEGIN_AVX512
+namespace avx512 {
+#include "core/simd/lanes_x86_256.inl"
+}  // namespace avx512
 DYNAHAND_SIMD_END
 
 #endif  // DYNAHAND_SIMD_X86

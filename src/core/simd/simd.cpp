@@ -12,6 +12,9 @@ namespace {
 Level detectBestLevel() {
 #if defined(__x86_64__) && defined(__GNUC__)
   __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("avx512f") &&
+      __builtin_cpu_supports("avx512vl"))
+    return Level::Avx512;
   if (__builtin_cpu_supports("avx2")) return Level::Avx2;
   return Level::Sse2;
 #else
@@ -50,6 +53,8 @@ const char* levelName(Level level) {
       return "sse2";
     case Level::Avx2:
       return "avx2";
+    case Level::Avx512:
+      return "avx512";
   }
   return "?";
 }

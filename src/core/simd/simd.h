@@ -14,14 +14,20 @@
 #define DYNAHAND_SIMD_X86 0
 #endif
 
-// Functions defined between DYNAHAND_SIMD_BEGIN_AVX2 and DYNAHAND_SIMD_END are compiled for
-// AVX2 (and run only where simd::level() says the CPU has it).
+// Functions defined between DYNAHAND_SIMD_BEGIN_AVX2 (or _AVX512) and DYNAHAND_SIMD_END are
+// compiled for AVX2 (AVX-512F and VL), and run only where simd::level() says the CPU has it.
 #if defined(__clang__)
 #define DYNAHAND_SIMD_BEGIN_AVX2 \
   _Pragma("clang attribute push(__attribute__((target(\"avx2\"))), apply_to = function)")
+#define DYNAHAND_SIMD_BEGIN_AVX512                                                           \
+  _Pragma(                                                                                   \
+      "clang attribute push(__attribute__((target(\"avx2,avx512f,avx512vl\"))), apply_to = " \
+      "function)")
 #define DYNAHAND_SIMD_END _Pragma("clang attribute pop")
 #else
 #define DYNAHAND_SIMD_BEGIN_AVX2 _Pragma("GCC push_options") _Pragma("GCC target(\"avx2\")")
+#define DYNAHAND_SIMD_BEGIN_AVX512 \
+  _Pragma("GCC push_options") _Pragma("GCC target(\"avx2,avx512f,avx512vl\")")
 #define DYNAHAND_SIMD_END _Pragma("GCC pop_options")
 #endif
 
@@ -31,6 +37,9 @@
 #define DYNAHAND_SIMD_DISPATCH(function, ...) \
   do {                                        \
     switch (::dynahand::simd::level()) {      \
+      case ::dynahand::simd::Level::Avx512:   \
+        simd_avx512::function(__VA_ARGS__);   \
+        break;                                \
       case ::dynahand::simd::Level::Avx2:     \
         simd_avx2::function(__VA_ARGS__);     \
         break;                                \
@@ -49,10 +58,11 @@
 namespace dynahand::simd {
 
 /// The instruction sets the kernels are built for, narrowest first. The build's baseline is
-/// plain x86-64 (SSE2); the wider levels run where the CPU has them.
-enum class Level { Scalar = 0, Sse2 = 1, Avx2 = 2 };
+/// plain x86-64 (SSE2); the wider levels run where the CPU has them. Avx512 runs the AVX2
+/// instructions compiled for AVX-512F and VL (32 registers).
+enum class Level { Scalar = 0, Sse2 = 1, Avx2 = 2, Avx512 = 3 };
 
-inline constexpr int kLevelCount = 3;
+inline constexpr int kLevelCount = 4;
 
 /// The widest level the CPU supports (Scalar off x86-64 or without GCC's CPU detection).
 Level bestLevel();
@@ -65,7 +75,7 @@ Level level();
 /// level now in use. For tests and benchmarks comparing levels: not for concurrent tracking.
 Level forceLevel(Level wanted);
 
-/// "scalar", "sse2", "avx2".
+/// "scalar", "sse2", "avx2", "avx512".
 const char* levelName(Level level);
 
 /// Denormals flushed to zero (x86: FTZ and DAZ) while it lives, the caller's mode restored

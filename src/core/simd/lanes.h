@@ -5,12 +5,14 @@
 //   FloatW  eight floats;   IntW  eight int32;   MaskW  eight booleans (a compare's result);
 // with the same functions and the same results bit for bit: IEEE single-precision arithmetic
 // lane by lane, int32 arithmetic wrapping modulo 2^32, x86's conversion rules (truncation of a
-// float outside the int32 range or NaN gives INT32_MIN), compares false on NaN.
+// float outside the int32 range or NaN gives INT32_MIN), x86's min and max, compares false on
+// NaN.
 //
-// Kernels do not include this directly: for_each_level.inl compiles a kernel file once per
-// level inside a namespace that sees that level's names, and simd.h's DYNAHAND_SIMD_DISPATCH
-// calls the build for simd::level(). This file and for_each_level.inl are the only ones that
-// name intrinsics.
+// A kernel's source file includes this at the top; its kernels live in a kernel file that
+// for_each_level.inl compiles once per level inside a namespace that sees that level's names,
+// and simd.h's DYNAHAND_SIMD_DISPATCH calls the build for simd::level(). Intrinsics appear in
+// the layer's files only (this one, lanes_x86_256.inl, simd.cpp) and in the error metric's
+// point mapping and plane scan (track/posed_bodies.cpp), which have their own switches.
 #pragma once
 
 #include <bit>

@@ -10,9 +10,8 @@
 #include <cstdint>
 #include <limits>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include "core/simd/lanes.h"
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define DYNAHAND_PLANE_SCAN_AVX 1
@@ -35,6 +34,9 @@ float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
   *face = which;
   return result;
 }
+
+#define DYNAHAND_SIMD_KERNELS "track/plane_scan.inl"
+#include "core/simd/for_each_level.inl"
 
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
 // ((nx qx + ny qy) + nz qz) - o lane by lane: a plane distance in the scalar paths' order.
@@ -78,45 +80,6 @@ __attribute__((target("avx"), always_inline)) inline void keepLargest(__m256 d, 
 #endif
 
 #if defined(DYNAHAND_PLANE_SCAN_AVX)
-// The same eight lanes as the SSE path in one 256-bit register (half the loop trips). Only
-// AVX (no FMA): each lane's multiply-add sequence is unchanged, so both paths give identical
-// bits. Face indices ride in a float register (exact far beyond any face count), since
-// 256-bit integer operations need AVX2.
-__attribute__((target("avx"))) float maxPlaneDistanceAvx(const float* nx, const float* ny,
-                                                         const float* nz, const float* o,
-                                                         std::size_t n, const Vec3& q,
-                                                         float stopAbove, int* face) {
-  const __m256 qx = _mm256_set1_ps(q.x()), qy = _mm256_set1_ps(q.y()), qz = _mm256_set1_ps(q.z());
-  const __m256 stop = _mm256_set1_ps(stopAbove);
-  const __m256 eight = _mm256_set1_ps(8.0f);
-  __m256 best = _mm256_set1_ps(-1e30f);
-  __m256 index = _mm256_setzero_ps();
-  __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-  for (std::size_t f = 0; f < n; f += 8) {
-    const __m256 d = planeDistance8(_mm256_loadu_ps(nx + f), _mm256_loadu_ps(ny + f),
-                                    _mm256_loadu_ps(nz + f), _mm256_loadu_ps(o + f), qx, qy, qz);
-    keepLargest(d, lane, best, index);
-    lane = _mm256_add_ps(lane, eight);
-    if (_mm256_movemask_ps(_mm256_cmp_ps(d, stop, _CMP_GT_OQ)) != 0) break;
-  }
-  // The lanes' maximum, then the lowest face index among the lanes holding it (as the
-  // scalar reduction does).
-  __m256 m = _mm256_max_ps(best, _mm256_permute2f128_ps(best, best, 1));
-  m = _mm256_max_ps(m, _mm256_permute_ps(m, 0x4E));
-  m = _mm256_max_ps(m, _mm256_permute_ps(m, 0xB1));
-  const __m256 tied = _mm256_cmp_ps(best, m, _CMP_EQ_OQ);
-  __m256 i = _mm256_or_ps(_mm256_and_ps(tied, index), _mm256_andnot_ps(tied, _mm256_set1_ps(1e9f)));
-  i = _mm256_min_ps(i, _mm256_permute2f128_ps(i, i, 1));
-  i = _mm256_min_ps(i, _mm256_permute_ps(i, 0x4E));
-  i = _mm256_min_ps(i, _mm256_permute_ps(i, 0xB1));
-  const int chosen = static_cast<int>(_mm256_cvtss_f32(i));
-  *face = chosen;
-  // The chosen plane's distance, by the lanes' arithmetic: the same bits as its lane, also
-  // where the maximum is a zero of either sign.
-  const auto c = static_cast<std::size_t>(chosen);
-  return (nx[c] * q.x() + ny[c] * q.y()) + nz[c] * q.z() - o[c];
-}
-
 // Bounding-sphere lower bounds max(0, |p - c_i| - r_i) for `blocks` blocks of eight bodies
 // (SoA, padded with far spheres); returns the smallest over the first `count` bodies and
 // writes the lowest index holding it to *first (-1 when count is 0).
@@ -444,70 +407,16 @@ bool PosedBodies::useWidePlaneScan(bool) {
 
 float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* face,
                                     float stopAbove) {
-  // Eight independent lanes (maximum and its face per lane), reduced at the end: the same
-  // arithmetic in the SSE and the scalar path, so both give identical bits.
+  // Eight independent lanes (maximum and its face per lane, plane_scan.inl), reduced at the
+  // end: the same arithmetic on every SIMD level, so the same bits.
   const std::size_t n = t.offset.size();
   const float* nx = t.nx.data();
   const float* ny = t.ny.data();
   const float* nz = t.nz.data();
   const float* o = t.offset.data();
-  alignas(16) float best[8];
-  alignas(16) std::int32_t index[8];
-#if defined(DYNAHAND_PLANE_SCAN_AVX)
-  if (wideScan.load(std::memory_order_relaxed))
-    return maxPlaneDistanceAvx(nx, ny, nz, o, n, q, stopAbove, face);
-#endif
-#if defined(__SSE2__)
-  const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
-  const __m128 stop = _mm_set1_ps(stopAbove);
-  __m128 best0 = _mm_set1_ps(-1e30f), best1 = best0;
-  __m128i index0 = _mm_setzero_si128(), index1 = index0;
-  __m128i lane0 = _mm_setr_epi32(0, 1, 2, 3), lane1 = _mm_setr_epi32(4, 5, 6, 7);
-  const __m128i eight = _mm_set1_epi32(8);
-  auto distance = [&](std::size_t i) {
-    return _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(nx + i), qx),
-                                            _mm_mul_ps(_mm_loadu_ps(ny + i), qy)),
-                                 _mm_mul_ps(_mm_loadu_ps(nz + i), qz)),
-                      _mm_loadu_ps(o + i));
-  };
-  auto keep = [](__m128& b, __m128i& idx, __m128 d, __m128i lane) {
-    const __m128 better = _mm_cmpgt_ps(d, b);
-    b = _mm_max_ps(d, b);  // == better ? d : b (no NaNs here)
-    const __m128i m = _mm_castps_si128(better);
-    idx = _mm_or_si128(_mm_and_si128(m, lane), _mm_andnot_si128(m, idx));
-  };
-  for (std::size_t f = 0; f < n; f += 8) {
-    const __m128 d0 = distance(f), d1 = distance(f + 4);
-    keep(best0, index0, d0, lane0);
-    keep(best1, index1, d1, lane1);
-    lane0 = _mm_add_epi32(lane0, eight);
-    lane1 = _mm_add_epi32(lane1, eight);
-    // The caller only needs to know the distance exceeds stopAbove: any plane says so.
-    if (_mm_movemask_ps(_mm_or_ps(_mm_cmpgt_ps(d0, stop), _mm_cmpgt_ps(d1, stop))) != 0) break;
-  }
-  _mm_store_ps(best, best0);
-  _mm_store_ps(best + 4, best1);
-  _mm_store_si128(reinterpret_cast<__m128i*>(index), index0);
-  _mm_store_si128(reinterpret_cast<__m128i*>(index + 4), index1);
-#else
-  const float qx = q.x(), qy = q.y(), qz = q.z();
-  for (int k = 0; k < 8; ++k) {
-    best[k] = -1e30f;
-    index[k] = 0;
-  }
-  for (std::size_t f = 0; f < n; f += 8) {
-    bool above = false;
-    for (int k = 0; k < 8; ++k) {
-      const std::size_t i = f + static_cast<std::size_t>(k);
-      const float d = (nx[i] * qx + ny[i] * qy) + nz[i] * qz - o[i];
-      const bool better = d > best[k];
-      best[k] = better ? d : best[k];
-      index[k] = better ? static_cast<std::int32_t>(i) : index[k];
-      above |= d > stopAbove;
-    }
-    if (above) break;
-  }
-#endif
+  float best[simd::kLanes];
+  std::int32_t index[simd::kLanes];
+  DYNAHAND_SIMD_DISPATCH(maxPlaneDistanceLanes, nx, ny, nz, o, n, q, stopAbove, best, index);
   return reduceLanes(best, index, face);
 }
 

@@ -79,10 +79,11 @@ class PosedBodies {
                            std::span<const float> settle, std::span<SurfaceHit> hits,
                            std::span<std::uint8_t> settled) const;
 
-  // The face-plane scans (and the exact query's bounding-sphere bounds) run eight at a time
-  // with AVX when the CPU has it (on by default there), else four per SSE instruction or
-  // scalar; both give identical bits. false forces the narrow path (for tests comparing the
-  // two); returns whether the wide path is now in use.
+  // One point's face-plane scan runs eight planes at a time on the SIMD layer's level
+  // (plane_scan.inl). The bulk queries (nearestMany, nearestPlanarMany, nearestManySettling)
+  // run body by body over eight points at a time with AVX when the CPU has it (on by default
+  // there), else point by point; both give identical bits. false forces the point-by-point
+  // path (for tests comparing the two); returns whether the bulk path is now in use.
   static bool useWidePlaneScan(bool enabled);
   // The bulk queries' wide scan uses AVX-512's mask registers where the CPU has AVX-512VL
   // (on by default there; same bits); false forces the AVX one. Returns whether it is in use.

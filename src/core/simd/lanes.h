@@ -12,7 +12,7 @@
 // for_each_level.inl compiles once per level inside a namespace that sees that level's names,
 // and simd.h's DYNAHAND_SIMD_DISPATCH calls the build for simd::level(). Intrinsics appear in
 // the layer's files only (this one, lanes_x86_256.inl, simd.cpp) and in the error metric's
-// point mapping and plane scan (track/posed_bodies.cpp), which have their own switches.
+// bulk queries (track/posed_bodies.cpp), which have their own switches.
 #pragma once
 
 #include <bit>

@@ -136,7 +136,7 @@ TEST(SimdLanes, TheScalarLevelFollowsTheX86Rules) {
   EXPECT_EQ(asInt(r.lanes[mulOp][2]), 0);  // 2^32: the low 32 bits
   EXPECT_EQ(asInt(r.lanes[mulOp][3]), -12);
   const int minOp = 5, maxOp = 6;  // x86's order: b where a is NaN, b of two zeros
-  EXPECT_TRUE(std::isnan(std::bit_cast<float>(r.lanes[minOp][2])) == false);
+  EXPECT_FALSE(std::isnan(std::bit_cast<float>(r.lanes[minOp][2])));
   EXPECT_EQ(r.lanes[minOp][5], std::bit_cast<std::uint32_t>(0.0f));  // min(-0, +0) = +0
   EXPECT_EQ(r.lanes[maxOp][5], std::bit_cast<std::uint32_t>(0.0f));
 }

@@ -1,5 +1,7 @@
 #include "core/simd/simd.h"
 
+#include "core/cpu_features.h"
+
 #include <atomic>
 
 #if DYNAHAND_SIMD_X86
@@ -10,12 +12,9 @@ namespace dynahand::simd {
 namespace {
 
 Level detectBestLevel() {
-#if defined(__x86_64__) && defined(__GNUC__)
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("avx512f") &&
-      __builtin_cpu_supports("avx512vl"))
-    return Level::Avx512;
-  if (__builtin_cpu_supports("avx2")) return Level::Avx2;
+#if DYNAHAND_SIMD_X86
+  if (cpuHasAvx2() && cpuHasAvx512vl()) return Level::Avx512;
+  if (cpuHasAvx2()) return Level::Avx2;
   return Level::Sse2;
 #else
   return Level::Scalar;
@@ -23,7 +22,7 @@ Level detectBestLevel() {
 }
 
 std::atomic<Level>& currentLevel() {
-  static std::atomic<Level> current{detectBestLevel()};
+  static std::atomic<Level> current{bestLevel()};
   return current;
 }
 

@@ -16,7 +16,6 @@
 #include "dynahand/synth.h"
 #include "dynahand/tracker.h"
 #include "physics/kernel_paths.h"
-#include "track/finger_detector.h"
 #include "track/posed_bodies.h"
 
 namespace dynahand::track {

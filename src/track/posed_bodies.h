@@ -60,7 +60,7 @@ class PosedBodies {
   SurfaceHit nearestPlanar(const Vec3& p, BodyMask mask = kAllBodies, int hint = -1) const;
   // nearestPlanar(points[i], kAllBodies, hints[i]) for every point, with the same bits, into
   // hits[i]; hints[i] becomes hits[i].body. Body by body over many points at once (eight
-  // points per AVX instruction where the CPU has it): the mapping's bulk path. Not for
+  // points per step of the SIMD layer, bulk_queries.inl): the mapping's bulk path. Not for
   // concurrent calls on one object (it keeps scratch buffers).
   void nearestPlanarMany(std::span<const Vec3> points, std::span<int> hints,
                          std::span<SurfaceHit> hits) const;
@@ -74,20 +74,18 @@ class PosedBodies {
   // "settled": it is tested against no other body, hits[i] is the first body's exact hit (d
   // is an upper bound on its nearest distance) and settled[i] = 1. With settle[j] at most
   // body j's errFit so far, such a point cannot raise any errFit. Other points get nearest()'s
-  // answer and settled[i] = 0. Without AVX nothing settles.
+  // answer and settled[i] = 0. The same points settle on every SIMD level; with the bulk
+  // queries switched off (useBulkQueries) none does.
   void nearestManySettling(std::span<const Vec3> points, std::span<const int> hints,
                            std::span<const float> settle, std::span<SurfaceHit> hits,
                            std::span<std::uint8_t> settled) const;
 
-  // One point's face-plane scan runs eight planes at a time on the SIMD layer's level
-  // (plane_scan.inl). The bulk queries (nearestMany, nearestPlanarMany, nearestManySettling)
-  // run body by body over eight points at a time with AVX when the CPU has it (on by default
-  // there), else point by point; both give identical bits. false forces the point-by-point
-  // path (for tests comparing the two); returns whether the bulk path is now in use.
-  static bool useWidePlaneScan(bool enabled);
-  // The bulk queries' wide scan uses AVX-512's mask registers where the CPU has AVX-512VL
-  // (on by default there; same bits); false forces the AVX one. Returns whether it is in use.
-  static bool useMaskedPlaneScan(bool enabled);
+  // One point's face-plane scan runs eight planes at a time (plane_scan.inl); the bulk queries
+  // (nearestMany, nearestPlanarMany, nearestManySettling) run body by body over eight points at
+  // a time (bulk_queries.inl); both on the SIMD layer's level, with the same bits on every
+  // level. false (a test switch) makes the bulk queries answer point by point with the
+  // one-point queries, which give the same hits; returns `enabled`.
+  static bool useBulkQueries(bool enabled);
 
  private:
   // Face planes of one shape as SoA, padded to a multiple of 8 with planes that never win.

@@ -5,17 +5,7 @@
 inline void applyOps(const float* a, const float* b, const std::int32_t* i, const std::int32_t* j,
                      std::uint32_t (*out)[8]) {
   const FloatW fa = load(a), fb = load(b);
-  IntW ia, ib;
-  {
-    // No int load in the layer: build the lanes from splats and selects of iota.
-    ia = splat(std::int32_t{0});
-    ib = splat(std::int32_t{0});
-    for (int lane = 0; lane < kLanes; ++lane) {
-      const MaskW here = (iota() > splat(lane - 1)) & (splat(lane + 1) > iota());
-      ia = select(here, splat(i[lane]), ia);
-      ib = select(here, splat(j[lane]), ib);
-    }
-  }
+  const IntW ia = load(i), ib = load(j);
   float f[8];
   std::int32_t n[8];
   int op = 0;
@@ -41,6 +31,7 @@ inline void applyOps(const float* a, const float* b, const std::int32_t* i, cons
   putFloat(abs(fa));
   putFloat(min(fa, fb));
   putFloat(max(fa, fb));
+  putFloat(sqrt(abs(fa)));
   putFloat(toFloat(ia));
   putInt(truncate(fa));
   putInt(ia + ib);
@@ -50,6 +41,7 @@ inline void applyOps(const float* a, const float* b, const std::int32_t* i, cons
   putMask(fa <= fb);
   putMask(fa > fb);
   putMask(fa >= fb);
+  putMask(fa == fb);
   putMask(ia > ib);
   putMask((fa < fb) & (ia > ib));
   putInt(select(fa < fb, ia, ib));

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <limits>
 #include <random>
+#include <string_view>
 
 #include "core/simd/lanes.h"
 #include "core/simd/simd.h"
@@ -26,6 +27,7 @@ constexpr const char* kOpNames[] = {"a + b",
                                     "abs(a)",
                                     "min(a, b)",
                                     "max(a, b)",
+                                    "sqrt(abs(a))",
                                     "toFloat(i)",
                                     "truncate(a)",
                                     "i + j",
@@ -35,6 +37,7 @@ constexpr const char* kOpNames[] = {"a + b",
                                     "a <= b",
                                     "a > b",
                                     "a >= b",
+                                    "a == b",
                                     "i > j",
                                     "(a < b) & (i > j)",
                                     "select(a < b, i, j)",
@@ -46,6 +49,12 @@ constexpr const char* kOpNames[] = {"a + b",
                                     "i == i",
                                     "laneMask(i[0] & 7)"};
 constexpr int kOps = static_cast<int>(std::size(kOpNames));
+int opIndex(std::string_view name) {
+  for (int op = 0; op < kOps; ++op)
+    if (name == kOpNames[op]) return op;
+  ADD_FAILURE() << "no operation " << name;
+  return 0;
+}
 
 struct Results {
   std::uint32_t lanes[kOps][8];
@@ -124,7 +133,8 @@ TEST(SimdLanes, TheScalarLevelFollowsTheX86Rules) {
   const std::int32_t j[8] = {1, 1, 65536, -4, 4, 0, 7, 7};
   const Results r = run(simd::Level::Scalar, a, b, i, j);
   simd::forceLevel(simd::bestLevel());
-  const int truncateOp = 8, addOp = 9, subOp = 10, mulOp = 11;
+  const int truncateOp = opIndex("truncate(a)"), addOp = opIndex("i + j"), subOp = opIndex("i - j"),
+            mulOp = opIndex("mulLow(i, j)");
   const auto asInt = [](std::uint32_t x) { return static_cast<std::int32_t>(x); };
   EXPECT_EQ(asInt(r.lanes[truncateOp][0]), INT32_MIN);  // out of range
   EXPECT_EQ(asInt(r.lanes[truncateOp][1]), INT32_MIN);
@@ -135,7 +145,8 @@ TEST(SimdLanes, TheScalarLevelFollowsTheX86Rules) {
   EXPECT_EQ(asInt(r.lanes[subOp][1]), INT32_MAX);
   EXPECT_EQ(asInt(r.lanes[mulOp][2]), 0);  // 2^32: the low 32 bits
   EXPECT_EQ(asInt(r.lanes[mulOp][3]), -12);
-  const int minOp = 5, maxOp = 6;  // x86's order: b where a is NaN, b of two zeros
+  const int minOp = opIndex("min(a, b)"),
+            maxOp = opIndex("max(a, b)");  // x86's order: b where a is NaN, b of two zeros
   EXPECT_FALSE(std::isnan(std::bit_cast<float>(r.lanes[minOp][2])));
   EXPECT_EQ(r.lanes[minOp][5], std::bit_cast<std::uint32_t>(0.0f));  // min(-0, +0) = +0
   EXPECT_EQ(r.lanes[maxOp][5], std::bit_cast<std::uint32_t>(0.0f));

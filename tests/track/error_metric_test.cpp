@@ -6,11 +6,30 @@
 #include <algorithm>
 #include <limits>
 #include <random>
+#include <string>
 
+#include "core/simd/simd.h"
 #include "track/error_metric.h"
 
 namespace dynahand::track {
 namespace {
+
+// The bulk queries' paths: each SIMD level the CPU has in turn (scalar first), then point by
+// point (the one-point queries at the best level).
+int bulkPathCount() {
+  return static_cast<int>(simd::bestLevel()) + 2;
+}
+std::string chooseBulkPath(int path) {
+  const bool bulk = path <= static_cast<int>(simd::bestLevel());
+  const simd::Level level = bulk ? static_cast<simd::Level>(path) : simd::bestLevel();
+  simd::forceLevel(level);
+  PosedBodies::useBulkQueries(bulk);
+  return bulk ? std::string("bulk, ") + simd::levelName(level) : "point by point";
+}
+void restoreBulkPath() {
+  simd::forceLevel(simd::bestLevel());
+  PosedBodies::useBulkQueries(true);
+}
 
 // Closest point on triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
 Vec3 closestOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -168,8 +187,7 @@ TEST(ErrorMetric, BoundedVersionIsExactUnderTheBoundAndALowerBoundAbove) {
 // point's distance is an upper bound no larger than settleBelowM.
 TEST(ErrorMetric, SettlingGivesTheSameErrorsAndUpperBoundsBelowItsLimit) {
   constexpr float kSettleBelow = 0.05f;  // the random points lie up to a few cm off
-  const bool wide = PosedBodies::useWidePlaneScan(true);
-  std::size_t settledTotal = 0;  // points in no pointCount
+  std::size_t settledTotal = 0;          // points in no pointCount
   for (unsigned seed = 1; seed <= 10; ++seed) {
     Scene s = randomScene(seed);
     PosedBodies bodies;
@@ -199,10 +217,35 @@ TEST(ErrorMetric, SettlingGivesTheSameErrorsAndUpperBoundsBelowItsLimit) {
                                      {}, {}, kSettleBelow));
     EXPECT_EQ(stoppedSettled.total, stopped.total) << "seed " << seed;
   }
-  // Only the eight-wide path settles.
-  if (wide) {
-    EXPECT_GT(settledTotal, 300u);
+  EXPECT_GT(settledTotal, 300u);
+}
+
+// Settling gives the same bits on every SIMD level: the same points settle, with the same
+// distances.
+TEST(ErrorMetric, SettlingGivesTheSameBitsOnEveryLevel) {
+  constexpr float kSettleBelow = 0.05f;
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    Scene s = randomScene(seed);
+    PosedBodies bodies;
+    bodies.set(s.shapePtrs, s.poses);
+    const FreeSpaceTest isFree = s.freeSpace();
+    ErrorBreakdown reference;
+    for (int level = 0; level <= static_cast<int>(simd::bestLevel()); ++level) {
+      const std::string name = chooseBulkPath(level);
+      ErrorBreakdown settled;
+      ASSERT_TRUE(computeErrorBounded(bodies, s.points, isFree,
+                                      std::numeric_limits<float>::infinity(), settled, {}, {},
+                                      kSettleBelow));
+      if (level == 0) {
+        reference = settled;
+        continue;
+      }
+      EXPECT_EQ(settled.total, reference.total) << name;
+      EXPECT_EQ(settled.pointCount, reference.pointCount) << name;
+      EXPECT_EQ(settled.pointDistance, reference.pointDistance) << name;
+    }
   }
+  restoreBulkPath();
 }
 
 TEST(ErrorMetric, PerfectFitHasNoFitError) {
@@ -298,18 +341,15 @@ TEST(PosedBodies, PlanarQueryIsExactInsideAndALowerBoundOutside) {
   EXPECT_GT(inside, 0);
 }
 
-// The bulk planar and exact queries (body by body, eight points at a time where the CPU has
-// AVX) answer every point exactly as the one-point queries do, whatever the hints.
+// The bulk planar and exact queries (body by body, eight points at a time, on every SIMD level)
+// answer every point exactly as the one-point queries do, whatever the hints.
 TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
     Scene s = randomScene(seed);
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
-    // Wide with AVX-512 masks (where the CPU has them), wide with AVX, narrow.
-    for (const int path : {0, 1, 2}) {
-      const bool wide = path < 2;
-      PosedBodies::useMaskedPlaneScan(path == 0);
-      PosedBodies::useWidePlaneScan(wide);
+    for (int path = 0; path < bulkPathCount(); ++path) {
+      const std::string name = chooseBulkPath(path);
       std::vector<int> hints(s.points.size());
       for (std::size_t i = 0; i < hints.size(); ++i)
         hints[i] = static_cast<int>(i % 7) - 1;  // none, right and wrong bodies
@@ -321,18 +361,17 @@ TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
         const SurfaceHit one = bodies.nearestPlanar(s.points[i], kAllBodies, given[i]);
         const SurfaceHit exact = bodies.nearest(s.points[i], kAllBodies, given[i]);
         for (const auto& [a, b] : {std::pair{hits[i], one}, std::pair{exactHits[i], exact}}) {
-          EXPECT_EQ(a.body, b.body);
-          EXPECT_EQ(a.face, b.face);
-          EXPECT_EQ(a.distance, b.distance);
-          EXPECT_EQ(a.signedDistance, b.signedDistance);
-          EXPECT_EQ(a.localPoint, b.localPoint);
+          EXPECT_EQ(a.body, b.body) << name;
+          EXPECT_EQ(a.face, b.face) << name;
+          EXPECT_EQ(a.distance, b.distance) << name;
+          EXPECT_EQ(a.signedDistance, b.signedDistance) << name;
+          EXPECT_EQ(a.localPoint, b.localPoint) << name;
         }
-        EXPECT_EQ(hints[i], one.body);
+        EXPECT_EQ(hints[i], one.body) << name;
       }
     }
   }
-  PosedBodies::useWidePlaneScan(true);
-  PosedBodies::useMaskedPlaneScan(true);
+  restoreBulkPath();
 }
 
 // The bulk queries at their edges: no points, no bodies, out-of-range hints, two identical
@@ -340,9 +379,8 @@ TEST(PosedBodies, ManyPointsPlanarQueryMatchesOnePointAtATime) {
 // crash, no hit on a real distance).
 TEST(PosedBodies, ManyPointsQueriesHandleEmptyInputTiesAndBadPoints) {
   Scene s = randomScene(3);
-  for (const int path : {0, 1, 2}) {  // AVX-512 masks, AVX, narrow
-    PosedBodies::useMaskedPlaneScan(path == 0);
-    PosedBodies::useWidePlaneScan(path < 2);
+  for (int path = 0; path < bulkPathCount(); ++path) {
+    SCOPED_TRACE(chooseBulkPath(path));
     PosedBodies none;
     none.set({}, {});
     std::vector<int> hints(s.points.size(), -1);
@@ -376,8 +414,7 @@ TEST(PosedBodies, ManyPointsQueriesHandleEmptyInputTiesAndBadPoints) {
     }
     EXPECT_FALSE(hits.back().distance < 0.06f) << "a NaN point attaches nowhere";
   }
-  PosedBodies::useWidePlaneScan(true);
-  PosedBodies::useMaskedPlaneScan(true);
+  restoreBulkPath();
 }
 
 // Points equally far from two or more faces of a cube (its centre, its diagonals, its
@@ -397,50 +434,48 @@ TEST(PosedBodies, ManyPointsQueriesBreakFaceTiesLikeOnePointQueries) {
       points.emplace_back(a, b, 0.5f + a);        // x = z
       points.emplace_back(0.0f, 0.0f, 0.5f + a);  // on the axis: four faces tie
     }
-  for (const int path : {0, 1, 2}) {  // AVX-512 masks, AVX, narrow
-    PosedBodies::useMaskedPlaneScan(path == 0);
-    PosedBodies::useWidePlaneScan(path < 2);
+  for (int path = 0; path < bulkPathCount(); ++path) {
+    const std::string name = chooseBulkPath(path);
     std::vector<int> hints(points.size(), 0);
     std::vector<SurfaceHit> hits(points.size()), exactHits(points.size());
     bodies.nearestPlanarMany(points, hints, hits);
     bodies.nearestMany(points, std::vector<int>(points.size(), 0), exactHits);
-    PosedBodies::useWidePlaneScan(false);
+    simd::forceLevel(simd::Level::Scalar);  // the reference: one-point queries, scalar level
     for (std::size_t i = 0; i < points.size(); ++i) {
-      EXPECT_EQ(hits[i].face, bodies.nearestPlanar(points[i], kAllBodies, 0).face) << path;
-      EXPECT_EQ(exactHits[i].face, bodies.nearest(points[i], kAllBodies, 0).face) << path;
+      EXPECT_EQ(hits[i].face, bodies.nearestPlanar(points[i], kAllBodies, 0).face) << name;
+      EXPECT_EQ(exactHits[i].face, bodies.nearest(points[i], kAllBodies, 0).face) << name;
     }
   }
-  PosedBodies::useWidePlaneScan(true);
-  PosedBodies::useMaskedPlaneScan(true);
+  restoreBulkPath();
 }
 
-// The AVX plane scan (where the CPU has it) and the SSE one give the same bits.
-TEST(PosedBodies, WideAndNarrowPlaneScansAgreeBitForBit) {
-  const bool wide = PosedBodies::useWidePlaneScan(true);
-  if (!wide) GTEST_SKIP() << "this CPU has no AVX: only the SSE plane scan exists here";
+// The one-point queries give the scalar level's bits on every SIMD level.
+TEST(PosedBodies, OnePointQueriesGiveTheSameBitsOnEveryLevel) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
     Scene s = randomScene(seed);
     PosedBodies bodies;
     bodies.set(s.shapePtrs, s.poses);
     for (const Vec3& p : s.points) {
       for (int hint : {-1, 2}) {
-        PosedBodies::useWidePlaneScan(true);
-        const SurfaceHit exactWide = bodies.nearest(p, kAllBodies, hint);
-        const SurfaceHit planarWide = bodies.nearestPlanar(p, kAllBodies, hint);
-        PosedBodies::useWidePlaneScan(false);
+        simd::forceLevel(simd::Level::Scalar);
         const SurfaceHit exact = bodies.nearest(p, kAllBodies, hint);
         const SurfaceHit planar = bodies.nearestPlanar(p, kAllBodies, hint);
-        for (const auto& [a, b] : {std::pair{exactWide, exact}, std::pair{planarWide, planar}}) {
-          EXPECT_EQ(a.body, b.body);
-          EXPECT_EQ(a.face, b.face);
-          EXPECT_EQ(a.distance, b.distance);
-          EXPECT_EQ(a.signedDistance, b.signedDistance);
-          EXPECT_EQ(a.localPoint, b.localPoint);
+        for (int level = 1; level <= static_cast<int>(simd::bestLevel()); ++level) {
+          simd::forceLevel(static_cast<simd::Level>(level));
+          const SurfaceHit exactWide = bodies.nearest(p, kAllBodies, hint);
+          const SurfaceHit planarWide = bodies.nearestPlanar(p, kAllBodies, hint);
+          for (const auto& [a, b] : {std::pair{exactWide, exact}, std::pair{planarWide, planar}}) {
+            EXPECT_EQ(a.body, b.body) << level;
+            EXPECT_EQ(a.face, b.face) << level;
+            EXPECT_EQ(a.distance, b.distance) << level;
+            EXPECT_EQ(a.signedDistance, b.signedDistance) << level;
+            EXPECT_EQ(a.localPoint, b.localPoint) << level;
+          }
         }
       }
     }
   }
-  PosedBodies::useWidePlaneScan(true);
+  restoreBulkPath();
 }
 
 }  // namespace

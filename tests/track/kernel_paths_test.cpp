@@ -1,6 +1,6 @@
 // The tracker's output bytes do not depend on which path its vector kernels take: every
 // kernel with a vector and a narrower path (physics: surface-row preparation and sweeps;
-// error metric: the plane scan and its AVX-512 mask variant; the SIMD layer's kernels) is forced
+// error metric: the bulk queries against the one-point ones; the SIMD layer's kernels) is forced
 // to its narrow path in turn, then all at once, and every level of the SIMD layer in turn, and
 // the standard clips must track to the same bits as with every fast path the CPU has. Paths the
 // CPU lacks are narrow already: the comparison then covers fewer of them (the test says which).
@@ -26,17 +26,16 @@ constexpr int kFrames = 20;
 // Every kernel's fast path on (where the CPU has it) but `narrow` (bit i: path i forced
 // narrow, in the order of kPathNames); returns which fast paths are in use.
 constexpr const char* kPathNames[] = {"surface prepare (8 lanes)", "surface sweeps (batches)",
-                                      "plane scan (AVX)", "plane scan mask (AVX-512)",
+                                      "error metric's bulk queries",
                                       "SIMD layer kernels (core/simd, widest level)"};
 unsigned choosePaths(unsigned narrow) {
   unsigned fast = 0;
   // The level first: the sweeps run in batches only above the scalar level.
-  const simd::Level level = (narrow & 16u) == 0 ? simd::bestLevel() : simd::Level::Scalar;
-  fast |= simd::forceLevel(level) != simd::Level::Scalar ? 16u : 0u;
+  const simd::Level level = (narrow & 8u) == 0 ? simd::bestLevel() : simd::Level::Scalar;
+  fast |= simd::forceLevel(level) != simd::Level::Scalar ? 8u : 0u;
   fast |= physics::useWideSurfacePrepare((narrow & 1u) == 0) ? 1u : 0u;
   fast |= physics::useVectorSweeps((narrow & 2u) == 0) ? 2u : 0u;
-  fast |= PosedBodies::useWidePlaneScan((narrow & 4u) == 0) ? 4u : 0u;
-  fast |= PosedBodies::useMaskedPlaneScan((narrow & 8u) == 0) ? 8u : 0u;
+  fast |= PosedBodies::useBulkQueries((narrow & 4u) == 0) ? 4u : 0u;
   return fast;
 }
 

@@ -11,11 +11,11 @@
 // A kernel's source file includes this at the top; its kernels live in a kernel file that
 // for_each_level.inl compiles once per level inside a namespace that sees that level's names,
 // and simd.h's DYNAHAND_SIMD_DISPATCH calls the build for simd::level(). Intrinsics appear in
-// the layer's files only (this one, lanes_x86_256.inl, simd.cpp) and in the error metric's
-// bulk queries (track/posed_bodies.cpp), which have their own switches.
+// the layer's files only (this one, lanes_x86_256.inl, simd.cpp).
 #pragma once
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 
 #include "core/simd/simd.h"
@@ -66,6 +66,11 @@ DYNAHAND_SIMD_INLINE IntW iota() {
 }
 DYNAHAND_SIMD_INLINE FloatW load(const float* p) {
   FloatW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = p[i];
+  return r;
+}
+DYNAHAND_SIMD_INLINE IntW load(const std::int32_t* p) {
+  IntW r;
   for (int i = 0; i < kLanes; ++i) r.lane[i] = p[i];
   return r;
 }
@@ -121,6 +126,12 @@ DYNAHAND_SIMD_INLINE FloatW max(FloatW a, FloatW b) {
   for (int i = 0; i < kLanes; ++i) r.lane[i] = a.lane[i] > b.lane[i] ? a.lane[i] : b.lane[i];
   return r;
 }
+// The correctly rounded square root (NaN below zero).
+DYNAHAND_SIMD_INLINE FloatW sqrt(FloatW a) {
+  FloatW r;
+  for (int i = 0; i < kLanes; ++i) r.lane[i] = std::sqrt(a.lane[i]);
+  return r;
+}
 DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
   FloatW r;
   for (int i = 0; i < kLanes; ++i) r.lane[i] = static_cast<float>(a.lane[i]);
@@ -146,6 +157,7 @@ DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, <)
 DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, <=)
 DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, >)
 DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, >=)
+DYNAHAND_SIMD_SCALAR_COMPARE(FloatW, ==)
 DYNAHAND_SIMD_SCALAR_COMPARE(IntW, >)
 #undef DYNAHAND_SIMD_SCALAR_COMPARE
 
@@ -217,6 +229,10 @@ DYNAHAND_SIMD_INLINE IntW iota() {
 DYNAHAND_SIMD_INLINE FloatW load(const float* p) {
   return {_mm_loadu_ps(p), _mm_loadu_ps(p + 4)};
 }
+DYNAHAND_SIMD_INLINE IntW load(const std::int32_t* p) {
+  const auto* v = reinterpret_cast<const __m128i*>(p);
+  return {_mm_loadu_si128(v), _mm_loadu_si128(v + 1)};
+}
 DYNAHAND_SIMD_INLINE void store(float* p, FloatW a) {
   _mm_storeu_ps(p, a.lo);
   _mm_storeu_ps(p + 4, a.hi);
@@ -263,6 +279,9 @@ DYNAHAND_SIMD_INLINE FloatW min(FloatW a, FloatW b) {
 DYNAHAND_SIMD_INLINE FloatW max(FloatW a, FloatW b) {
   return {_mm_max_ps(a.lo, b.lo), _mm_max_ps(a.hi, b.hi)};
 }
+DYNAHAND_SIMD_INLINE FloatW sqrt(FloatW a) {
+  return {_mm_sqrt_ps(a.lo), _mm_sqrt_ps(a.hi)};
+}
 DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
   return {_mm_cvtepi32_ps(a.lo), _mm_cvtepi32_ps(a.hi)};
 }
@@ -280,6 +299,9 @@ DYNAHAND_SIMD_INLINE MaskW operator>(FloatW a, FloatW b) {
 }
 DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
   return {_mm_castps_si128(_mm_cmpge_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmpge_ps(a.hi, b.hi))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator==(FloatW a, FloatW b) {
+  return {_mm_castps_si128(_mm_cmpeq_ps(a.lo, b.lo)), _mm_castps_si128(_mm_cmpeq_ps(a.hi, b.hi))};
 }
 DYNAHAND_SIMD_INLINE MaskW operator>(IntW a, IntW b) {
   return {_mm_cmpgt_epi32(a.lo, b.lo), _mm_cmpgt_epi32(a.hi, b.hi)};
@@ -327,17 +349,22 @@ DYNAHAND_SIMD_INLINE void transpose8(FloatW (&r)[kLanes]) {
 }  // namespace sse2
 
 DYNAHAND_SIMD_BEGIN_AVX2
+#define DYNAHAND_SIMD_MASK_REGISTERS 0
 namespace avx2 {
 #include "core/simd/lanes_x86_256.inl"
 }  // namespace avx2
+#undef DYNAHAND_SIMD_MASK_REGISTERS
 DYNAHAND_SIMD_END
 
 // The same 256-bit lanes compiled for AVX-512VL: the compiler has 32 vector registers (loops
-// that keep many values in registers spill less) and the same instructions, so the same bits.
+// that keep many values in registers spill less), compares write mask registers, and the
+// arithmetic is the same instructions, so the same bits.
 DYNAHAND_SIMD_BEGIN_AVX512
+#define DYNAHAND_SIMD_MASK_REGISTERS 1
 namespace avx512 {
 #include "core/simd/lanes_x86_256.inl"
 }  // namespace avx512
+#undef DYNAHAND_SIMD_MASK_REGISTERS
 DYNAHAND_SIMD_END
 
 #endif  // DYNAHAND_SIMD_X86

@@ -1,7 +1,7 @@
 // The 256-bit lanes of lanes.h (FloatW, IntW, MaskW in one register each), included once for
-// AVX2 (namespace simd::avx2) and once for AVX-512VL (simd::avx512), inside lanes.h's target
-// regions. No include guard, no includes.
-
+// AVX2 (namespace simd::avx2) and once for AVX-512VL (simd::avx512, with
+// DYNAHAND_SIMD_MASK_REGISTERS: MaskW in a mask register), inside lanes.h's target regions. No
+// include guard, no includes.
 
 struct FloatW {
   __m256 v;
@@ -9,9 +9,15 @@ struct FloatW {
 struct IntW {
   __m256i v;
 };
+#if DYNAHAND_SIMD_MASK_REGISTERS
+struct MaskW {
+  __mmask8 k;  // bit i: lane i (an AVX-512 mask register)
+};
+#else
 struct MaskW {
   __m256i v;  // all ones in a true lane
 };
+#endif
 
 DYNAHAND_SIMD_INLINE FloatW splat(float x) {
   return {_mm256_set1_ps(x)};
@@ -24,6 +30,9 @@ DYNAHAND_SIMD_INLINE IntW iota() {
 }
 DYNAHAND_SIMD_INLINE FloatW load(const float* p) {
   return {_mm256_loadu_ps(p)};
+}
+DYNAHAND_SIMD_INLINE IntW load(const std::int32_t* p) {
+  return {_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))};
 }
 DYNAHAND_SIMD_INLINE void store(float* p, FloatW a) {
   _mm256_storeu_ps(p, a.v);
@@ -61,12 +70,58 @@ DYNAHAND_SIMD_INLINE FloatW min(FloatW a, FloatW b) {
 DYNAHAND_SIMD_INLINE FloatW max(FloatW a, FloatW b) {
   return {_mm256_max_ps(a.v, b.v)};
 }
+DYNAHAND_SIMD_INLINE FloatW sqrt(FloatW a) {
+  return {_mm256_sqrt_ps(a.v)};
+}
 DYNAHAND_SIMD_INLINE FloatW toFloat(IntW a) {
   return {_mm256_cvtepi32_ps(a.v)};
 }
 DYNAHAND_SIMD_INLINE IntW truncate(FloatW a) {
   return {_mm256_cvttps_epi32(a.v)};
 }
+#if DYNAHAND_SIMD_MASK_REGISTERS
+// Compares write a mask register and selects blend through it: one instruction less per
+// select than a vector mask (the same bits).
+DYNAHAND_SIMD_INLINE MaskW operator<(FloatW a, FloatW b) {
+  return {_mm256_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator<=(FloatW a, FloatW b) {
+  return {_mm256_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator>(FloatW a, FloatW b) {
+  return {_mm256_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
+  return {_mm256_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator==(FloatW a, FloatW b) {
+  return {_mm256_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator>(IntW a, IntW b) {
+  return {_mm256_cmpgt_epi32_mask(a.v, b.v)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator&(MaskW a, MaskW b) {
+  return {static_cast<__mmask8>(a.k & b.k)};
+}
+DYNAHAND_SIMD_INLINE unsigned bits(MaskW m) {
+  return static_cast<unsigned>(m.k);
+}
+DYNAHAND_SIMD_INLINE bool all(MaskW m) {
+  return m.k == 0xff;
+}
+DYNAHAND_SIMD_INLINE IntW select(MaskW m, IntW a, IntW b) {
+  return {_mm256_mask_blend_epi32(m.k, b.v, a.v)};
+}
+DYNAHAND_SIMD_INLINE FloatW select(MaskW m, FloatW a, FloatW b) {
+  return {_mm256_mask_blend_ps(m.k, b.v, a.v)};
+}
+DYNAHAND_SIMD_INLINE MaskW laneMask(int k) {
+  return {static_cast<__mmask8>(1u << k)};
+}
+DYNAHAND_SIMD_INLINE MaskW operator==(IntW a, IntW b) {
+  return {_mm256_cmpeq_epi32_mask(a.v, b.v)};
+}
+#else
 DYNAHAND_SIMD_INLINE MaskW operator<(FloatW a, FloatW b) {
   return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ))};
 }
@@ -78,6 +133,9 @@ DYNAHAND_SIMD_INLINE MaskW operator>(FloatW a, FloatW b) {
 }
 DYNAHAND_SIMD_INLINE MaskW operator>=(FloatW a, FloatW b) {
   return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ))};
+}
+DYNAHAND_SIMD_INLINE MaskW operator==(FloatW a, FloatW b) {
+  return {_mm256_castps_si256(_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ))};
 }
 DYNAHAND_SIMD_INLINE MaskW operator>(IntW a, IntW b) {
   return {_mm256_cmpgt_epi32(a.v, b.v)};
@@ -103,6 +161,7 @@ DYNAHAND_SIMD_INLINE MaskW laneMask(int k) {
 DYNAHAND_SIMD_INLINE MaskW operator==(IntW a, IntW b) {
   return {_mm256_cmpeq_epi32(a.v, b.v)};
 }
+#endif
 DYNAHAND_SIMD_INLINE void transpose8(FloatW (&r)[kLanes]) {
   const __m256 t0 = _mm256_unpacklo_ps(r[0].v, r[1].v), t1 = _mm256_unpackhi_ps(r[0].v, r[1].v);
   const __m256 t2 = _mm256_unpacklo_ps(r[2].v, r[3].v), t3 = _mm256_unpackhi_ps(r[2].v, r[3].v);
@@ -121,4 +180,3 @@ DYNAHAND_SIMD_INLINE void transpose8(FloatW (&r)[kLanes]) {
   r[6].v = _mm256_permute2f128_ps(s2, s6, 0x31);
   r[7].v = _mm256_permute2f128_ps(s3, s7, 0x31);
 }
-

@@ -225,14 +225,9 @@ float ConvexShape::nearestEdge(const Vec3& p, int* edge, float* t) const {
   DYNAHAND_SIMD_DISPATCH(nearestEdgeLanes, edgeAx_.data(), edgeAy_.data(), edgeAz_.data(),
                          edgeDx_.data(), edgeDy_.data(), edgeDz_.data(), edgeInvLen2_.data(), n, p,
                          best, index);
-  int which = index[0];
+  std::int32_t which = index[0];
   float result = best[0];
-  for (int k = 1; k < simd::kLanes; ++k) {
-    if (best[k] < result || (best[k] == result && index[k] < which)) {
-      result = best[k];
-      which = index[k];
-    }
-  }
+  simd::foldLeastLane(best, index, result, which);
   const auto i = static_cast<std::size_t>(which);
   const float wx = p.x() - edgeAx_[i], wy = p.y() - edgeAy_[i], wz = p.z() - edgeAz_[i];
   const float along = (wx * edgeDx_[i] + wy * edgeDy_[i]) + wz * edgeDz_[i];
@@ -382,13 +377,9 @@ Vec3 ConvexShape::support(const Vec3& direction) const {
     std::int32_t index[simd::kLanes];
     DYNAHAND_SIMD_DISPATCH(supportLanes, vertexX_.data(), vertexY_.data(), vertexZ_.data(), n,
                            direction, bestDot, value, index, &i);
-    for (int k = 0; k < simd::kLanes; ++k) {
-      const auto at = static_cast<std::size_t>(index[k]);
-      if (value[k] > bestDot || (value[k] == bestDot && at < best)) {
-        bestDot = value[k];
-        best = at;
-      }
-    }
+    std::int32_t which = 0;
+    simd::foldLargestLane(value, index, bestDot, which);
+    best = static_cast<std::size_t>(which);
   }
   for (; i < n; ++i) {
     const float d = vertices_[i].dot(direction);

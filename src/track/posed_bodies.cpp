@@ -15,20 +15,6 @@ namespace dynahand::track {
 
 namespace {
 
-// The largest of the eight lanes' maxima; ties go to the lower face index.
-float reduceLanes(const float best[8], const std::int32_t index[8], int* face) {
-  float result = best[0];
-  int which = index[0];
-  for (int k = 1; k < 8; ++k) {
-    if (best[k] > result || (best[k] == result && index[k] < which)) {
-      result = best[k];
-      which = index[k];
-    }
-  }
-  *face = which;
-  return result;
-}
-
 #define DYNAHAND_SIMD_KERNELS "track/plane_scan.inl"
 #include "core/simd/for_each_level.inl"
 
@@ -50,6 +36,12 @@ constexpr CompressTable kCompress;
 
 #define DYNAHAND_SIMD_KERNELS "track/bulk_queries.inl"
 #include "core/simd/for_each_level.inl"
+
+// Bit k set for each lane k of the last eight of `padded` SoA slots that holds one of the n
+// real points (the rest repeat the last point).
+unsigned realLastLanes(std::size_t n, std::size_t padded) {
+  return (1u << (n - (padded - simd::kLanes))) - 1u;
+}
 
 // The bulk queries body by body over eight points at a time (off: point by point, for tests).
 std::atomic<bool> bulkQueries{true};
@@ -157,7 +149,11 @@ float PosedBodies::maxPlaneDistance(const PlaneTable& t, const Vec3& q, int* fac
   float best[simd::kLanes];
   std::int32_t index[simd::kLanes];
   DYNAHAND_SIMD_DISPATCH(maxPlaneDistanceLanes, nx, ny, nz, o, n, q, stopAbove, best, index);
-  return reduceLanes(best, index, face);
+  float result = best[0];
+  std::int32_t which = index[0];
+  simd::foldLargestLane(best, index, result, which);  // ties go to the lower face index
+  *face = which;
+  return result;
 }
 
 namespace {
@@ -327,7 +323,7 @@ void PosedBodies::settleFirstHits(std::size_t n, std::size_t padded, const float
   // point is tested against no other body (a best of -infinity reaches no sphere).
   const auto bodyCount = static_cast<std::size_t>(size());
   for (std::size_t i = 0; i < n; ++i) settled[i] = first_[i] >= 0.0f ? 1 : 0;
-  const unsigned lastLanes = (1u << (n - (padded - 8))) - 1u;  // the real points of the last 8
+  const unsigned lastLanes = realLastLanes(n, padded);
   for (std::size_t b = 0; b < bodyCount; ++b)
     DYNAHAND_SIMD_DISPATCH(unsettleByBodyLanes, px_.data(), py_.data(), pz_.data(),
                            bestDistance_.data(), first_.data(), padded, lastLanes,
@@ -344,7 +340,7 @@ void PosedBodies::listReachablePoints(std::size_t n, std::size_t padded) const {
   // Appended without branches (the reachable lanes are unpredictable): eight indices
   // compressed by a table, written whole, the count advanced by the mask's bits.
   const auto bodyCount = static_cast<std::size_t>(size());
-  const unsigned lastLanes = (1u << (n - (padded - 8))) - 1u;  // the real points of the last 8
+  const unsigned lastLanes = realLastLanes(n, padded);
   for (std::size_t b = 0; b < bodyCount; ++b) {
     DYNAHAND_SIMD_DISPATCH(reachablePointsLanes, px_.data(), py_.data(), pz_.data(),
                            bestDistance_.data(), first_.data(), padded, lastLanes,

@@ -36,6 +36,29 @@ alignas(32) inline constexpr std::int32_t kLaneMaskTable[kLanes][kLanes] = {
     {0, 0, 0, -1, 0, 0, 0, 0}, {0, 0, 0, 0, -1, 0, 0, 0}, {0, 0, 0, 0, 0, -1, 0, 0},
     {0, 0, 0, 0, 0, 0, -1, 0}, {0, 0, 0, 0, 0, 0, 0, -1}};
 
+// Folds a kernel's eight per-lane answers (value[k] and its index[k], each lane's own first
+// best) into a running best, lane by lane: the largest value, the lowest index among equal
+// values, so the answer is the one a scan one element at a time finds.
+inline void foldLargestLane(const float (&value)[kLanes], const std::int32_t (&index)[kLanes],
+                            float& best, std::int32_t& which) {
+  for (int k = 0; k < kLanes; ++k) {
+    if (value[k] > best || (value[k] == best && index[k] < which)) {
+      best = value[k];
+      which = index[k];
+    }
+  }
+}
+// foldLargestLane for the least value.
+inline void foldLeastLane(const float (&value)[kLanes], const std::int32_t (&index)[kLanes],
+                          float& best, std::int32_t& which) {
+  for (int k = 0; k < kLanes; ++k) {
+    if (value[k] < best || (value[k] == best && index[k] < which)) {
+      best = value[k];
+      which = index[k];
+    }
+  }
+}
+
 namespace scalar {
 
 struct FloatW {

@@ -171,8 +171,9 @@ struct TrackerSettings {
 /// How well the fitted hand explains the data (beyond the paper's metric):
 struct FitQuality {
   float dataNearModel = 0.0f;  ///< share of the hand's sample points within 10 mm of the model
-  float modelOnHand = 0.0f;    ///< share of the camera-facing model surface (by area, forearm
-                               ///< excluded) that projects onto segmented pixels
+  float modelOnHand = 0.0f;    ///< share of the camera-facing model surface (by area as seen
+                               ///< from the camera, forearm excluded) that projects onto
+                               ///< segmented pixels
   int fingertipsOffHand = 0;   ///< fingertip keypoints projecting more than 3 pixels outside
                                ///< the segmentation (onto background)
 };

@@ -12,9 +12,8 @@
 namespace dynahand::physics {
 namespace {
 constexpr int kSpread = 4;
-// The width of the table that fixes each slot's row order and the mass splitting: four, the
-// width the tracker's tuning was done with (the sweeps themselves are eight wide).
-constexpr int kOrderLanes = 4;
+// A slot with more than 1/kSplitShare of the rows is split into copies (mass splitting).
+constexpr int kSplitShare = 4;
 constexpr int kMinRowsToSplit = 32;  // fewer rows on one slot are never split
 }  // namespace
 
@@ -106,9 +105,8 @@ void SurfaceBatches::build(const std::vector<PreparedSurfaceRow>& rows,
 int SurfaceBatches::assignSolvingSlots(const std::vector<PreparedSurfaceRow>& rows) {
   const int n = static_cast<int>(rows.size());
   // Slots with more than a quarter of the rows are split (see the header), but not small
-  // sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster. (A quarter:
-  // kOrderLanes, and the split decides the results.)
-  const int target = std::max(1, (n + kOrderLanes - 1) / kOrderLanes);
+  // sets: a few rows solve as well in sequence, and Gauss-Seidel converges faster.
+  const int target = std::max(1, (n + kSplitShare - 1) / kSplitShare);
   count_.assign(static_cast<std::size_t>(slotCount_), 0);
   for (const PreparedSurfaceRow& r : rows) ++count_[static_cast<std::size_t>(r.slot)];
   splits_.clear();
@@ -196,10 +194,7 @@ int SurfaceBatches::dealIntoTable(int n, int largest) {
   //
   // Each slot's order: its rows (in input order, i.e. scanline order of the points) taken
   // every kSpread-th, so that Gauss-Seidel alternates between parts of the body instead of
-  // sweeping it from one side to the other; then rotated where the same dealing into a table
-  // kOrderLanes wide wraps: the order the tracker was tuned with (the rotation itself means
-  // nothing).
-  const int orderBatches = std::max((n + kOrderLanes - 1) / kOrderLanes, largest);
+  // sweeping it from one side to the other.
   const int batchCount = std::max((n + kLanes - 1) / kLanes, largest);
   batches_.resize(static_cast<std::size_t>(batchCount));
   lanes_.resize(static_cast<std::size_t>(batchCount));
@@ -220,14 +215,11 @@ int SurfaceBatches::dealIntoTable(int n, int largest) {
     for (int residue = 0; residue < kSpread; ++residue)
       for (int o = first + residue; o < end; o += kSpread)
         spread_.push_back(order_[static_cast<std::size_t>(o)]);
-    // The slot's k-th row is spread_[(k + turn) % length]; cell `position + j` is solved
-    // k-th with k = j - split for j >= split (the wrapped part, at the next column's top,
-    // comes first), else k = j - split + length.
-    const int wrap4 = wrapAfter(position, length, orderBatches);
-    const int turn = wrap4 < length ? wrap4 : 0;
+    // The slot's k-th row is spread_[k]; cell `position + j` is solved k-th with
+    // k = j - split for j >= split (the wrapped part, at the next column's top, comes first),
+    // else k = j - split + length.
     const int split = wrapAfter(position, length, batchCount);
-    const int rank = split < length ? length - split : 0;  // of cell `position`
-    int at = rank + turn >= length ? rank + turn - length : rank + turn;
+    int at = split < length ? length - split : 0;  // rank of cell `position`
     for (int j = 0; j < length; ++j) {
       cellRow_[static_cast<std::size_t>(position + j)] = spread_[static_cast<std::size_t>(at)];
       if (++at == length) at = 0;

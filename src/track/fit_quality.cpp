@@ -56,8 +56,9 @@ FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const float> p
       }
       centre /= static_cast<float>(count);
       const Vec3 world = pose.transform(centre);
-      if (pose.rotate(face.normal).dot(world) >= 0.0f || world.z() <= 0.0f) continue;
-      const double area = 0.5 * static_cast<double>(areaVector.norm());
+      const float facingCosine = -pose.rotate(face.normal).dot(world.normalized());
+      if (facingCosine <= 0.0f || world.z() <= 0.0f) continue;
+      const double area = 0.5 * static_cast<double>(areaVector.norm() * facingCosine);
       facing += area;
       const Vec2 uv = cloud.intrinsics.project(world);
       if (onMask(cloud, uv.x(), uv.y())) onHand += area;

@@ -154,11 +154,11 @@ float hiddenStraightFingers(const TrackerSettings& settings, int frames) {
 }
 
 TEST(Strategies, GraspBiasCurlsHiddenFingersWithTheirNeighbours) {
-  const float normal = hiddenStraightFingers(only({StrategyKind::Normal}), 30);
+  const float normal = hiddenStraightFingers(only({StrategyKind::Normal}), 45);
   const float grasp =
-      hiddenStraightFingers(only({StrategyKind::Normal, StrategyKind::GraspBias}), 30);
+      hiddenStraightFingers(only({StrategyKind::Normal, StrategyKind::GraspBias}), 45);
   std::printf(
-      "hidden ring and little tips after 1 s: normal only %.1f mm, with grasp bias %.1f mm\n",
+      "hidden ring and little tips after 1.5 s: normal only %.1f mm, with grasp bias %.1f mm\n",
       1000.0 * static_cast<double>(normal), 1000.0 * static_cast<double>(grasp));
   EXPECT_GT(normal, 0.03f);
   EXPECT_LT(grasp, 0.010f);

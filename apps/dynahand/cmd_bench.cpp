@@ -30,9 +30,10 @@ struct BenchOptions {
   std::string data;  // default: ../shared/data from the working folder or the source tree
   int threads = 1, frames = 0;
   bool quick = false;
-  bool noDetector = false;  // every item without the learned detector (an ablation)
-  std::string rows;         // only the items whose row label contains this (empty: all)
-  bool items = false;       // one line per item after each table
+  bool noDetector = false;             // every item without the learned detector (an ablation)
+  float keypointsFromTruthMm = -1.0f;  // >= 0: ground-truth keypoints with this noise, mm
+  std::string rows;                    // only the items whose row label contains this (empty: all)
+  bool items = false;                  // one line per item after each table
   // --suite soak
   double minutes = 0.0;   // default: 60 (track), 15 (--serve)
   std::string soakInput;  // default: soak.h's
@@ -183,6 +184,8 @@ std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const B
   }
   if (o.noDetector)
     for (eval::SuiteItem& item : items) item.tracker.detector.enabled = false;
+  if (o.keypointsFromTruthMm >= 0.0f)
+    for (eval::SuiteItem& item : items) item.truthKeypointsNoiseM = 0.001f * o.keypointsFromTruthMm;
   return items;
 }
 
@@ -314,6 +317,11 @@ const CommandRegistration kBenchCommand{Command{
           ->check(CLI::Range(1, 64));
       sub.add_flag("--no-detector", o->noDetector,
                    "every item without the learned detector (the paper's simulations only)");
+      sub.add_option("--keypoints-from-truth", o->keypointsFromTruthMm,
+                     "every item given the ground-truth keypoints plus Gaussian noise of this "
+                     "standard deviation per axis (mm) instead of the learned detector's: what "
+                     "a perfect (0) or a given-noise detector would give")
+          ->check(CLI::Range(0.0f, 100.0f));
       sub.add_option("--rows", o->rows,
                      "only the items of the rows whose name contains TEXT (e.g. 'held objects', "
                      "'tof / head'); with --suite all, each suite must have such rows");
@@ -354,6 +362,8 @@ const CommandRegistration kBenchCommand{Command{
         if (o->frames > 0) line += " --frames " + std::to_string(o->frames);
         if (o->threads > 1) line += " --threads " + std::to_string(o->threads);
         if (o->noDetector) line += " --no-detector";
+        if (o->keypointsFromTruthMm >= 0.0f)
+          line += fmt::format(" --keypoints-from-truth {}", o->keypointsFromTruthMm);
         if (!o->rows.empty()) line += " --rows '" + o->rows + "'";
         if (o->items) line += " --items";
         if (o->minutes > 0.0) line += fmt::format(" --minutes {}", o->minutes);

@@ -16,6 +16,7 @@
 
 #include "dynahand/cloud.h"
 #include "dynahand/depth_frame.h"
+#include "dynahand/detector.h"
 #include "dynahand/hand_split.h"
 #include "dynahand/model.h"
 #include "dynahand/model_pose.h"
@@ -240,6 +241,16 @@ class Tracker {
 
   /// Tracks one frame. The reference stays valid until the next call.
   const TrackResult& track(const DepthFrame& frame);
+  /// Keypoints of the hand on `side` from another source (camera frame, m, with a confidence
+  /// each in [0, 1]), used by the next track() call instead of the learned detector's: e.g. a
+  /// colour-image detector registered to the depth camera, or ground truth to measure what a
+  /// perfect detector would give (`dynahand bench --keypoints-from-truth`). They go through
+  /// the same tests as the detector's (DetectorSettings: confidences, distance from the
+  /// cloud) and drive the same simulations; meanConfidence is recomputed. Works with the
+  /// learned detector off or absent. Ignored for a side not tracked (TrackerSettings::hands 1:
+  /// the right hand only).
+  void setKeypoints(const detect::DetectedKeypoints& keypoints,
+                    model::Side side = model::Side::Right);
 
   /// The cloud of the last frame (points, mask, planes), e.g. for pictures.
   const CloudFrame& lastCloud() const;

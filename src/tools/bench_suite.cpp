@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <thread>
 
 #include <time.h>
@@ -185,6 +186,21 @@ std::uint64_t nameSeed(const std::string& name) {
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : name) h = (h ^ c) * 1099511628211ull;
   return h;
+}
+
+// Ground-truth keypoints as a detection: each coordinate plus Gaussian noise of standard
+// deviation sigma (m), every confidence 1.
+detect::DetectedKeypoints noisyTruth(const Keypoints21& truth, float sigma, std::mt19937& rng) {
+  detect::DetectedKeypoints k;
+  k.valid = true;
+  std::normal_distribution<float> normal(0.0f, 1.0f);
+  for (std::size_t j = 0; j < truth.size(); ++j) {
+    Vec3 offset = Vec3::Zero();
+    if (sigma > 0.0f) offset = sigma * Vec3(normal(rng), normal(rng), normal(rng));
+    k.points[j] = truth[j] + offset;
+    k.confidence[j] = 1.0f;
+  }
+  return k;
 }
 
 const char* placementName(synth::CameraPlacement p) {
@@ -429,9 +445,13 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   SuiteItemResult result;
   result.item = item;
   result.keypoints.fps = static_cast<double>(so.framesPerSecond);
+  std::mt19937 noise(static_cast<std::uint32_t>(nameSeed(item.clip) ^ item.seed));
   for (int f = 0; f < item.frames; ++f) {
     const synth::SyntheticFrame& frame = seq->frame(f);
     if (f == 0 && !item.autoInit) (*tracker)->initialize(frame.hands[0].pose);
+    if (item.truthKeypointsNoiseM >= 0.0f)
+      (*tracker)->setKeypoints(
+          noisyTruth(frame.hands[0].keypoints, item.truthKeypointsNoiseM, noise));
     const double cpuBefore = threadCpuMs();
     const track::TrackResult& r = (*tracker)->track(frame.depth);
     result.frameCpuMs.push_back(threadCpuMs() - cpuBefore);

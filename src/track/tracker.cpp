@@ -58,8 +58,9 @@ struct Tracker::Impl {
   std::unique_ptr<detect::KeypointDetector> keypointDetector;  // null: none
   detect::HandCrop crop;
   detect::DetectedKeypoints keypoints[2];
-  std::unique_ptr<WorkerPool> pool;       // null with one thread
-  std::unique_ptr<HandTracker> hands[2];  // [0] right, [1] left
+  bool givenKeypoints[2] = {false, false};  // keypoints[h] set by setKeypoints for this frame
+  std::unique_ptr<WorkerPool> pool;         // null with one thread
+  std::unique_ptr<HandTracker> hands[2];    // [0] right, [1] left
   std::vector<Vec3> handPoints[2];
   TrackResult result;
   int frameIndex = 0;
@@ -159,6 +160,17 @@ void Tracker::reset() {
   impl_->splitter.reset();
 }
 
+void Tracker::setKeypoints(const detect::DetectedKeypoints& keypoints, model::Side side) {
+  const std::size_t h = side == model::Side::Right ? 0 : 1;
+  if (!impl_->hands[h]) return;  // not tracked (one hand: the right one only)
+  detect::DetectedKeypoints& k = impl_->keypoints[h];
+  k = keypoints;
+  float sum = 0.0f;
+  for (const float c : k.confidence) sum += c;
+  k.meanConfidence = sum / static_cast<float>(k.confidence.size());
+  impl_->givenKeypoints[h] = true;
+}
+
 const CloudFrame& Tracker::lastCloud() const {
   return impl_->cloud;
 }
@@ -201,7 +213,11 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
   }
   for (int h = 0; h < handCount; ++h) {
     HandFrame in;
-    if (haveCloud && m.keypointDetector) {
+    if (m.givenKeypoints[h]) {
+      m.givenKeypoints[h] = false;
+      const detect::DetectedKeypoints& k = m.keypoints[h];
+      in.keypoints = haveCloud && k.valid ? &k : nullptr;
+    } else if (haveCloud && m.keypointDetector) {
       // The learned detector on this hand's crop (left hands mirrored into right ones).
       const Vec3* centre = nullptr;
       Vec3 clusterCentre;

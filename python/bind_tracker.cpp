@@ -350,6 +350,36 @@ class PyTracker {
     if (!s) throw py::value_error("initialize: " + s.message());
   }
 
+  void setKeypoints(const py::handle& keypoints, const py::handle& confidence,
+                    const std::string& side) {
+    if (side != "right" && side != "left") throw py::value_error("side must be 'right' or 'left'");
+    if (side == "left" && tracker_->settings().hands == 1)
+      throw py::value_error("side 'left': this tracker tracks one (right) hand");
+    const auto k = keypointsInput(keypoints, "set_keypoints");
+    if (!k) throw py::value_error("set_keypoints: keypoints are all NaN");
+    detect::DetectedKeypoints given;
+    given.valid = true;
+    given.points = *k;
+    given.confidence.fill(1.0f);
+    if (!confidence.is_none()) {
+      auto c = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(confidence);
+      if (!c) {
+        PyErr_Clear();
+        throw py::value_error("set_keypoints: confidence is not an array of numbers");
+      }
+      if (c.ndim() != 1 || c.shape(0) != 21)
+        throw py::value_error("set_keypoints: confidence must have shape (21,)");
+      for (py::ssize_t i = 0; i < 21; ++i) {
+        const double v = c.at(i);
+        if (!(v >= 0.0 && v <= 1.0))
+          throw py::value_error("set_keypoints: confidences must be in [0, 1]");
+        given.confidence[static_cast<std::size_t>(i)] = static_cast<float>(v);
+      }
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    tracker_->setKeypoints(given, side == "right" ? model::Side::Right : model::Side::Left);
+  }
+
   void reset() {
     std::lock_guard<std::mutex> lock(mutex_);
     tracker_->reset();
@@ -520,6 +550,12 @@ void bindTracker(py::module_& m) {
       .def("initialize", &PyTracker::initialize, py::arg("keypoints21"), py::arg("side") = "right",
            "Starts from 21 known keypoints of the next frame ((21, 3), m), fitted under the joint "
            "limits (as `dynahand track --init gt`).")
+      .def("set_keypoints", &PyTracker::setKeypoints, py::arg("keypoints21"),
+           py::arg("confidence") = py::none(), py::arg("side") = "right",
+           "Keypoints of the next frame's hand from another source ((21, 3), m, camera frame; "
+           "confidence (21,) in [0, 1], default 1), used by the next track() call instead of "
+           "the learned detector's (Tracker::setKeypoints): e.g. a colour-image detector "
+           "registered to the depth camera. Works with detector=False.")
       .def("reset", &PyTracker::reset, "Forgets the hands: the next frame acquires from scratch.")
       .def("result_json", &PyTracker::resultJson,
            "The last frame as the JSON line `dynahand track --out poses.jsonl` writes.")

@@ -150,3 +150,17 @@ def test_evaluate():
         dynahand.evaluate([gt[0], np.zeros(3)], gt)
     with pytest.raises(ValueError, match="fps"):
         dynahand.evaluate(gt, gt, fps=0.0)
+
+
+def test_set_keypoints_errors():
+    tracker = dynahand.Tracker(CAMERA, detector=False)
+    with pytest.raises(ValueError, match=r"shape \(21, 3\)"):
+        tracker.set_keypoints(np.zeros((20, 3)))
+    with pytest.raises(ValueError, match=r"shape \(21,\)"):
+        tracker.set_keypoints(np.zeros((21, 3)), confidence=np.ones(20))
+    with pytest.raises(ValueError, match=r"in \[0, 1\]"):
+        tracker.set_keypoints(np.zeros((21, 3)), confidence=np.full(21, 2.0))
+    with pytest.raises(ValueError, match="one \\(right\\) hand"):
+        tracker.set_keypoints(np.zeros((21, 3)), side="left")
+    with pytest.raises(ValueError, match="all NaN"):
+        tracker.set_keypoints(np.full((21, 3), np.nan))

@@ -200,3 +200,23 @@ def test_frame_errors_pass_through(tmp_path):
         dynahand.estimate_hand_size(seq)
     with pytest.raises(OSError, match="000000.png"):
         dynahand.Tracker(seq, hand_size="auto")
+
+
+def test_given_keypoints_stand_in_for_the_detector(clip):
+    """Tracker.set_keypoints: with detector=False, the given keypoints are used (and reported)
+    for the next frame only."""
+    seq = dynahand.open_sequence(clip)
+    tracker = dynahand.Tracker(seq, detector=False)
+    tracker.initialize(seq.ground_truth(0))
+    for i in range(3):
+        depth, scale, _ = seq[i]
+        truth = seq.ground_truth(i)
+        given = i != 1
+        if given:
+            tracker.set_keypoints(truth, confidence=np.full(21, 0.8))
+        hand = tracker.track(depth, scale)[0]
+        assert hand.detected == given
+        if given:
+            np.testing.assert_allclose(hand.detector_keypoints21, truth, atol=1e-6)
+            np.testing.assert_allclose(hand.detector_confidence, 0.8, atol=1e-6)
+        assert np.linalg.norm(hand.keypoints21 - truth, axis=1).mean() < 0.01

@@ -338,23 +338,26 @@ class PyTracker {
     return hands;
   }
 
-  void initialize(const py::handle& keypoints, const std::string& side) {
+  // `side` ("right" or "left") as a hand this tracker tracks.
+  model::Side trackedSide(const std::string& side) const {
     if (side != "right" && side != "left") throw py::value_error("side must be 'right' or 'left'");
     if (side == "left" && tracker_->settings().hands == 1)
       throw py::value_error("side 'left': this tracker tracks one (right) hand");
+    return side == "right" ? model::Side::Right : model::Side::Left;
+  }
+
+  void initialize(const py::handle& keypoints, const std::string& side) {
+    const model::Side hand = trackedSide(side);
     const auto k = keypointsInput(keypoints, "initialize");
     if (!k) throw py::value_error("initialize: keypoints are all NaN");
     std::lock_guard<std::mutex> lock(mutex_);
-    const Status s = tracker_->initializeFromKeypoints(
-        *k, side == "right" ? model::Side::Right : model::Side::Left);
+    const Status s = tracker_->initializeFromKeypoints(*k, hand);
     if (!s) throw py::value_error("initialize: " + s.message());
   }
 
   void setKeypoints(const py::handle& keypoints, const py::handle& confidence,
                     const std::string& side) {
-    if (side != "right" && side != "left") throw py::value_error("side must be 'right' or 'left'");
-    if (side == "left" && tracker_->settings().hands == 1)
-      throw py::value_error("side 'left': this tracker tracks one (right) hand");
+    const model::Side hand = trackedSide(side);
     const auto k = keypointsInput(keypoints, "set_keypoints");
     if (!k) throw py::value_error("set_keypoints: keypoints are all NaN");
     detect::DetectedKeypoints given;
@@ -377,7 +380,7 @@ class PyTracker {
       }
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    tracker_->setKeypoints(given, side == "right" ? model::Side::Right : model::Side::Left);
+    tracker_->setKeypoints(given, hand);
   }
 
   void reset() {

@@ -13,6 +13,7 @@
 
 #include <time.h>
 
+#include "dynahand/model_fit.h"
 #include "dynahand/synth.h"
 
 namespace dynahand::eval {
@@ -417,6 +418,25 @@ Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
   return suite;
 }
 
+namespace {
+
+// The model's pose nearest to a frame's true keypoints (SuiteItemResult::misfitKeypoints):
+// fitted from the pose the hand was rendered in, whose keypoints the rendered hand's
+// proportions moved. nullopt when the fit fails.
+std::optional<Keypoints21> fittedToTruth(const model::ArticulatedModel& handModel,
+                                         model::KeypointFitter& fitter,
+                                         const model::ModelPose& renderedPose,
+                                         const Keypoints21& truth) {
+  const model::JointAngles start = model::jointAngles(handModel, renderedPose);
+  model::FitOptions options;
+  options.initial = &start;
+  const Result<model::FitResult> fit = fitter.fit21(truth, options);
+  if (!fit) return std::nullopt;
+  return model::keypoints21(handModel, model::forwardKinematics(handModel, fit->angles));
+}
+
+}  // namespace
+
 Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   synth::SynthOptions so;
   so.clip = item.clip;
@@ -446,8 +466,12 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   result.item = item;
   result.keypoints.fps = static_cast<double>(so.framesPerSecond);
   std::mt19937 noise(static_cast<std::uint32_t>(nameSeed(item.clip) ^ item.seed));
+  const model::ArticulatedModel& handModel = seq->model(0);
+  model::KeypointFitter misfitFitter(handModel);
   for (int f = 0; f < item.frames; ++f) {
     const synth::SyntheticFrame& frame = seq->frame(f);
+    result.misfitKeypoints.predicted.push_back(
+        fittedToTruth(handModel, misfitFitter, frame.hands[0].pose, frame.hands[0].keypoints));
     if (f == 0 && !item.autoInit) (*tracker)->initialize(frame.hands[0].pose);
     if (item.truthKeypointsNoiseM >= 0.0f)
       (*tracker)->setKeypoints(
@@ -460,12 +484,24 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
     result.keypoints.groundTruth.push_back(frame.hands[0].keypoints);
     result.keypoints.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
                                                    : std::nullopt);
+    result.detectorKeypoints.predicted.push_back(
+        h.detected ? std::optional<Keypoints21>(h.detectorKeypoints21) : std::nullopt);
     if (item.heldObject != synth::HeldObject::None || item.tableDropM > 0.0f)
       result.keypoints.scored.push_back(notHiddenByTheScene(*seq, frame, frame.hands[0].keypoints));
   }
   auto metrics = computeKeypointMetrics(result.keypoints);
   if (!metrics) return Error{metrics.message()};
   result.metrics = std::move(*metrics);
+  for (SequenceKeypoints* k : {&result.detectorKeypoints, &result.misfitKeypoints}) {
+    k->groundTruth = result.keypoints.groundTruth;
+    k->scored = result.keypoints.scored;
+    k->fps = result.keypoints.fps;
+  }
+  auto detectorMetrics = computeKeypointMetrics(result.detectorKeypoints);
+  if (!detectorMetrics) return Error{detectorMetrics.message()};
+  result.detectorMeanMm = detectorMetrics->evaluatedFrames > 0
+                              ? detectorMetrics->meanMm
+                              : std::numeric_limits<double>::quiet_NaN();
   const std::vector<double>& maxMm = result.metrics.perFrameMaxMm;
   const auto within = [&](std::size_t f) {
     return !std::isnan(maxMm[f]) && maxMm[f] <= kAcquiredMaxJointMm;
@@ -558,7 +594,7 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
   for (const std::string& label : order) {
     SuiteRow row;
     row.label = label;
-    SequenceKeypoints all;
+    SequenceKeypoints all, detector, misfit;
     std::vector<double> times, cpuTimes;
     double acquireSum = 0;
     int acquired = 0;
@@ -569,6 +605,17 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
                              r->keypoints.groundTruth.end());
       all.predicted.insert(all.predicted.end(), r->keypoints.predicted.begin(),
                            r->keypoints.predicted.end());
+      all.scored.insert(all.scored.end(), r->keypoints.scored.begin(), r->keypoints.scored.end());
+      const SequenceKeypoints& d = r->detectorKeypoints;
+      detector.groundTruth.insert(detector.groundTruth.end(), d.groundTruth.begin(),
+                                  d.groundTruth.end());
+      detector.predicted.insert(detector.predicted.end(), d.predicted.begin(), d.predicted.end());
+      detector.scored.insert(detector.scored.end(), d.scored.begin(), d.scored.end());
+      const SequenceKeypoints& fit = r->misfitKeypoints;
+      misfit.groundTruth.insert(misfit.groundTruth.end(), fit.groundTruth.begin(),
+                                fit.groundTruth.end());
+      misfit.predicted.insert(misfit.predicted.end(), fit.predicted.begin(), fit.predicted.end());
+      misfit.scored.insert(misfit.scored.end(), fit.scored.begin(), fit.scored.end());
       times.insert(times.end(), r->frameMs.begin(), r->frameMs.end());
       cpuTimes.insert(cpuTimes.end(), r->frameCpuMs.begin(), r->frameCpuMs.end());
       for (int frames : r->framesToReacquire) {
@@ -592,6 +639,15 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
       row.meanMm = m->meanMm;
       row.p95Mm = m->p95Mm;
       row.success30 = m->successFraction[2];  // thresholds 10, 20, 30, 40, 50 mm
+    }
+    row.detectorMeanMm = std::numeric_limits<double>::quiet_NaN();
+    row.misfitMm = std::numeric_limits<double>::quiet_NaN();
+    if (auto m = computeKeypointMetrics(misfit); m && m->evaluatedFrames > 0)
+      row.misfitMm = m->meanMm;
+    if (auto m = computeKeypointMetrics(detector); m && m->evaluatedFrames > 0) {
+      row.detectorMeanMm = m->meanMm;
+      row.detectorRan =
+          m->visibleFrames > 0 ? static_cast<double>(m->evaluatedFrames) / m->visibleFrames : 0.0;
     }
     row.p50Ms = percentile(times, 0.5);
     row.p99Ms = percentile(times, 0.99);
@@ -637,14 +693,28 @@ std::string reacquireText(const SuiteRow& r) {
 
 }  // namespace
 
+namespace {
+
+// The detector alone: its mean error and, when it did not run on every frame, on how many.
+std::string detectorText(const SuiteRow& r) {
+  if (std::isnan(r.detectorMeanMm)) return "-";
+  std::string s = fmt::format("{:.1f}", r.detectorMeanMm);
+  if (r.detectorRan < 0.995) s += fmt::format(" ({:.0f}%)", 100.0 * r.detectorRan);
+  return s;
+}
+
+}  // namespace
+
 std::string motionTableText(const std::vector<SuiteRow>& rows) {
-  std::string s = fmt::format("{:<44} {:>5} {:>6} {:>8} {:>8} {:>7} {:>16} {:>22} {:>7}\n",
-                              "motion row", "items", "frames", "mean mm", "p95 mm", "<=30mm",
-                              "acquire mean/max", "re-acquire median", "p50 ms");
+  std::string s =
+      fmt::format("{:<44} {:>5} {:>6} {:>8} {:>8} {:>7} {:>11} {:>9} {:>16} {:>22} {:>7}\n",
+                  "motion row", "items", "frames", "mean mm", "p95 mm", "<=30mm", "detector mm",
+                  "misfit mm", "acquire mean/max", "re-acquire median", "p50 ms");
   for (const auto& r : rows) {
-    s += fmt::format("{:<44} {:>5} {:>6} {:>8.1f} {:>8.1f} {:>6.1f}% {:>16} {:>22} {:>7.2f}\n",
-                     r.label, r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30,
-                     acquireText(r), reacquireText(r), r.p50Ms);
+    s += fmt::format(
+        "{:<44} {:>5} {:>6} {:>8.1f} {:>8.1f} {:>6.1f}% {:>11} {:>9.1f} {:>16} {:>22} {:>7.2f}\n",
+        r.label, r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30, detectorText(r),
+        r.misfitMm, acquireText(r), reacquireText(r), r.p50Ms);
   }
   return s;
 }
@@ -652,14 +722,14 @@ std::string motionTableText(const std::vector<SuiteRow>& rows) {
 std::string motionTableMarkdown(const std::vector<SuiteRow>& rows) {
   std::string s =
       "| motion row | items | frames | mean error (mm) | p95 (mm) | frames max joint <= 30 mm | "
-      "auto init: frames to acquire (mean / max) | frames to re-acquire after a cut (median / "
-      "cuts) | "
-      "p50 ms |\n"
-      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+      "detector alone: mean error (mm) | model misfit: mean error (mm) | auto init: frames to "
+      "acquire (mean / max) | frames to re-acquire after a cut (median / cuts) | p50 ms |\n"
+      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const auto& r : rows) {
-    s += fmt::format("| {} | {} | {} | {:.1f} | {:.1f} | {:.1f}% | {} | {} | {:.2f} |\n", r.label,
-                     r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30, acquireText(r),
-                     reacquireText(r), r.p50Ms);
+    s += fmt::format(
+        "| {} | {} | {} | {:.1f} | {:.1f} | {:.1f}% | {} | {:.1f} | {} | {} | {:.2f} |\n", r.label,
+        r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30, detectorText(r), r.misfitMm,
+        acquireText(r), reacquireText(r), r.p50Ms);
   }
   return s;
 }

@@ -373,6 +373,11 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     badFrames_ = 0;
     out.tracked = false;
     out.error = 0.0f;
+    // Nothing detected either: not the last frame's detection.
+    out.detected = false;
+    out.detectorKeypoints21.fill(Vec3::Zero());
+    out.detectorConfidence.fill(0.0f);
+    out.detectorDisagreement = 0.0f;
     return;
   }
   prepareDetectorEvidence(frame);

@@ -137,6 +137,26 @@ TEST(DetectorTracking, WithTheShippedDetectorItRunsEveryFrame) {
   }
 }
 
+// A frame without the hand reports no detection, not the last frame's: the motion suite's
+// "detector alone" column counts the frames with one.
+TEST(DetectorTracking, AFrameWithoutTheHandReportsNoDetection) {
+  auto seq = synth::SyntheticSequence::create(test::clipOptions("wave", "tof", 1));
+  ASSERT_TRUE(seq);
+  auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), TrackerSettings{});
+  ASSERT_TRUE(tracker) << tracker.message();
+  const synth::SyntheticFrame& frame = seq->frame(0);
+  (*tracker)->initialize(frame.hands[0].pose);
+  const HandResult& seen = (*tracker)->track(frame.depth).hands[0];
+  ASSERT_TRUE(seen.tracked);
+  ASSERT_TRUE(seen.detected);
+  const DepthFrame empty(frame.depth.width, frame.depth.height, frame.depth.depthScale);
+  const HandResult& gone = (*tracker)->track(empty).hands[0];
+  EXPECT_FALSE(gone.tracked);
+  EXPECT_FALSE(gone.detected);
+  EXPECT_EQ(gone.detectorConfidence[0], 0.0f);
+  EXPECT_EQ(gone.detectorKeypoints21[0], Vec3::Zero());
+}
+
 // A detection on the hand is used; the same detection 0.3 m off the hand's points (a crop
 // around the wrong surface) is not (DetectorSettings::maxOffCloudM).
 TEST(DetectorTracking, ADetectionOffTheHandsPointsIsNotUsed) {

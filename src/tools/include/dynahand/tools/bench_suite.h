@@ -124,9 +124,19 @@ inline constexpr double kAcquiredMaxJointMm = 30.0;  ///< "tracking" for frames-
 
 /// What runSuiteItem measured for one item.
 struct SuiteItemResult {
-  SuiteItem item;                  ///< the item run
-  SequenceKeypoints keypoints;     ///< ground truth and prediction per frame
-  KeypointMetrics metrics;         ///< error statistics over `keypoints`
+  SuiteItem item;               ///< the item run
+  SequenceKeypoints keypoints;  ///< ground truth and prediction per frame
+  KeypointMetrics metrics;      ///< error statistics over `keypoints`
+  /// The same ground truth against the learned detector's keypoints (or those given with
+  /// truthKeypointsNoiseM) on their own, without the physics; nullopt where none were used.
+  SequenceKeypoints detectorKeypoints;
+  /// Mean joint error (mm) of `detectorKeypoints` over the frames with one; NaN: none.
+  double detectorMeanMm = 0;
+  /// The model's misfit: the same ground truth against the tracker's model fitted to each
+  /// frame's true keypoints under its joint limits (model::KeypointFitter, started from the
+  /// rendered pose). The rendered hand is shaped unlike the model, so no pose of the model
+  /// reaches its keypoints: the floor of the tracker's error with a perfect fit.
+  SequenceKeypoints misfitKeypoints;
   std::vector<double> frameMs;     ///< tracker wall time per frame (one thread), ms
   std::vector<double> frameCpuMs;  ///< CPU time of that thread in track(), ms: on a loaded
                                    ///< machine wall time grows, CPU time much less
@@ -149,14 +159,18 @@ Result<std::vector<SuiteItemResult>> runSuite(const std::vector<SuiteItem>& item
 
 /// One table row: items aggregated over clips.
 struct SuiteRow {
-  std::string label;                   ///< e.g. "tof / medium / gt" or "ablation: no grasp_bias"
-  int items = 0,                       ///< items aggregated
-      frames = 0;                      ///< frames over those items
-  double meanMm = 0,                   ///< mean joint error, mm
-      p95Mm = 0;                       ///< 95th percentile joint error, mm
-  double success30 = 0;                ///< fraction of frames with max joint error <= 30 mm
-  double p50Ms = 0,                    ///< median wall time per frame, ms
-      p99Ms = 0,                       ///< 99th percentile wall time per frame, ms
+  std::string label;     ///< e.g. "tof / medium / gt" or "ablation: no grasp_bias"
+  int items = 0,         ///< items aggregated
+      frames = 0;        ///< frames over those items
+  double meanMm = 0,     ///< mean joint error, mm
+      p95Mm = 0;         ///< 95th percentile joint error, mm
+  double success30 = 0;  ///< fraction of frames with max joint error <= 30 mm
+  /// The detector alone (SuiteItemResult::detectorKeypoints): mean joint error, mm, over the
+  /// frames it ran on (NaN: it ran on none), and the fraction of frames it ran on.
+  double detectorMeanMm = 0, detectorRan = 0;
+  double misfitMm = 0;  ///< mean joint error of the model fitted to the truth (misfitKeypoints), mm
+  double p50Ms = 0,     ///< median wall time per frame, ms
+      p99Ms = 0,        ///< 99th percentile wall time per frame, ms
       framesPerSecond = 0;             ///< frames per second of total wall time
   double p50CpuMs = 0;                 ///< median thread CPU time per frame, ms
   int autoItems = 0;                   ///< items with automatic acquisition
@@ -178,7 +192,8 @@ std::string rowLabel(const SuiteItem& item);
 std::string suiteTableText(const std::vector<SuiteRow>& rows);
 std::string suiteTableMarkdown(const std::vector<SuiteRow>& rows);  ///< as Markdown
 /// The motion suite's table (rows with a group label): mean / p95 error, frames within
-/// 30 mm, frames to acquire (auto) and to re-acquire after cuts, p50 ms.
+/// 30 mm, the detector alone's and the model misfit's mean error, frames to acquire (auto) and
+/// to re-acquire after cuts, p50 ms.
 std::string motionTableText(const std::vector<SuiteRow>& rows);
 std::string motionTableMarkdown(const std::vector<SuiteRow>& rows);  ///< as Markdown
 /// Mean error (mm) per clip for every ablation variant: what each strategy buys where.

@@ -435,6 +435,19 @@ std::optional<Keypoints21> fittedToTruth(const model::ArticulatedModel& handMode
   return model::keypoints21(handModel, model::forwardKinematics(handModel, fit->angles));
 }
 
+// Mean joint error (mm) over the frames with a prediction; NaN when there are none.
+double meanErrorMm(const Result<KeypointMetrics>& metrics) {
+  return metrics && metrics->evaluatedFrames > 0 ? metrics->meanMm
+                                                 : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Appends `from`'s frames to `to` (one row's items pooled).
+void append(SequenceKeypoints& to, const SequenceKeypoints& from) {
+  to.groundTruth.insert(to.groundTruth.end(), from.groundTruth.begin(), from.groundTruth.end());
+  to.predicted.insert(to.predicted.end(), from.predicted.begin(), from.predicted.end());
+  to.scored.insert(to.scored.end(), from.scored.begin(), from.scored.end());
+}
+
 }  // namespace
 
 Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
@@ -497,11 +510,8 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
     k->scored = result.keypoints.scored;
     k->fps = result.keypoints.fps;
   }
-  auto detectorMetrics = computeKeypointMetrics(result.detectorKeypoints);
-  if (!detectorMetrics) return Error{detectorMetrics.message()};
-  result.detectorMeanMm = detectorMetrics->evaluatedFrames > 0
-                              ? detectorMetrics->meanMm
-                              : std::numeric_limits<double>::quiet_NaN();
+  result.detectorMeanMm = meanErrorMm(computeKeypointMetrics(result.detectorKeypoints));
+  result.misfitMm = meanErrorMm(computeKeypointMetrics(result.misfitKeypoints));
   const std::vector<double>& maxMm = result.metrics.perFrameMaxMm;
   const auto within = [&](std::size_t f) {
     return !std::isnan(maxMm[f]) && maxMm[f] <= kAcquiredMaxJointMm;
@@ -601,21 +611,9 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
     std::vector<double> reacquire;  // never: infinity
     for (const SuiteItemResult* r : groups[label]) {
       ++row.items;
-      all.groundTruth.insert(all.groundTruth.end(), r->keypoints.groundTruth.begin(),
-                             r->keypoints.groundTruth.end());
-      all.predicted.insert(all.predicted.end(), r->keypoints.predicted.begin(),
-                           r->keypoints.predicted.end());
-      all.scored.insert(all.scored.end(), r->keypoints.scored.begin(), r->keypoints.scored.end());
-      const SequenceKeypoints& d = r->detectorKeypoints;
-      detector.groundTruth.insert(detector.groundTruth.end(), d.groundTruth.begin(),
-                                  d.groundTruth.end());
-      detector.predicted.insert(detector.predicted.end(), d.predicted.begin(), d.predicted.end());
-      detector.scored.insert(detector.scored.end(), d.scored.begin(), d.scored.end());
-      const SequenceKeypoints& fit = r->misfitKeypoints;
-      misfit.groundTruth.insert(misfit.groundTruth.end(), fit.groundTruth.begin(),
-                                fit.groundTruth.end());
-      misfit.predicted.insert(misfit.predicted.end(), fit.predicted.begin(), fit.predicted.end());
-      misfit.scored.insert(misfit.scored.end(), fit.scored.begin(), fit.scored.end());
+      append(all, r->keypoints);
+      append(detector, r->detectorKeypoints);
+      append(misfit, r->misfitKeypoints);
       times.insert(times.end(), r->frameMs.begin(), r->frameMs.end());
       cpuTimes.insert(cpuTimes.end(), r->frameCpuMs.begin(), r->frameCpuMs.end());
       for (int frames : r->framesToReacquire) {
@@ -640,15 +638,12 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
       row.p95Mm = m->p95Mm;
       row.success30 = m->successFraction[2];  // thresholds 10, 20, 30, 40, 50 mm
     }
-    row.detectorMeanMm = std::numeric_limits<double>::quiet_NaN();
-    row.misfitMm = std::numeric_limits<double>::quiet_NaN();
-    if (auto m = computeKeypointMetrics(misfit); m && m->evaluatedFrames > 0)
-      row.misfitMm = m->meanMm;
-    if (auto m = computeKeypointMetrics(detector); m && m->evaluatedFrames > 0) {
-      row.detectorMeanMm = m->meanMm;
+    const Result<KeypointMetrics> detectorMetrics = computeKeypointMetrics(detector);
+    row.detectorMeanMm = meanErrorMm(detectorMetrics);
+    if (detectorMetrics && detectorMetrics->visibleFrames > 0)
       row.detectorRan =
-          m->visibleFrames > 0 ? static_cast<double>(m->evaluatedFrames) / m->visibleFrames : 0.0;
-    }
+          static_cast<double>(detectorMetrics->evaluatedFrames) / detectorMetrics->visibleFrames;
+    row.misfitMm = meanErrorMm(computeKeypointMetrics(misfit));
     row.p50Ms = percentile(times, 0.5);
     row.p99Ms = percentile(times, 0.99);
     row.p50CpuMs = percentile(cpuTimes, 0.5);

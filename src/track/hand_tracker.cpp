@@ -367,17 +367,18 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
   out.acquired = false;
   out.candidates.clear();
   out.pointCount = static_cast<int>(frame.points.size());
+  // This frame's detection is filled in below; none (not the last frame's) until then, and
+  // when the hand has left the view.
+  out.detected = false;
+  out.detectorKeypoints21.fill(Vec3::Zero());
+  out.detectorConfidence.fill(0.0f);
+  out.detectorDisagreement = 0.0f;
   if (frame.points.size() < static_cast<std::size_t>(kMinPoints)) {
     // The hand left the view: lost until it comes back and is re-acquired.
     tracked_ = false;
     badFrames_ = 0;
     out.tracked = false;
     out.error = 0.0f;
-    // Nothing detected either: not the last frame's detection.
-    out.detected = false;
-    out.detectorKeypoints21.fill(Vec3::Zero());
-    out.detectorConfidence.fill(0.0f);
-    out.detectorDisagreement = 0.0f;
     return;
   }
   prepareDetectorEvidence(frame);
@@ -394,11 +395,8 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
   if (hand.keypoints != nullptr && hand.keypoints->valid) {
     out.detectorKeypoints21 = hand.keypoints->points;
     out.detectorConfidence = hand.keypoints->confidence;
-  } else {
-    out.detectorKeypoints21.fill(Vec3::Zero());
-    out.detectorConfidence.fill(0.0f);
   }
-  out.detectorDisagreement = keypoints_ != nullptr ? detectorDistance(out.keypoints21) : 0.0f;
+  if (keypoints_ != nullptr) out.detectorDisagreement = detectorDistance(out.keypoints21);
   out.disagreeingFrames = disagreeFrames_;
   if (out.tracked && hand.cloud != nullptr) {
     simulator_.pose(rig_, posed_);

@@ -130,13 +130,14 @@ struct SuiteItemResult {
   /// The same ground truth against the learned detector's keypoints (or those given with
   /// truthKeypointsNoiseM) on their own, without the physics; nullopt where none were used.
   SequenceKeypoints detectorKeypoints;
-  /// Mean joint error (mm) of `detectorKeypoints` over the frames with one; NaN: none.
-  double detectorMeanMm = 0;
   /// The model's misfit: the same ground truth against the tracker's model fitted to each
   /// frame's true keypoints under its joint limits (model::KeypointFitter, started from the
   /// rendered pose). The rendered hand is shaped unlike the model, so no pose of the model
   /// reaches its keypoints: the floor of the tracker's error with a perfect fit.
   SequenceKeypoints misfitKeypoints;
+  /// Mean joint error (mm) of `detectorKeypoints` and of `misfitKeypoints` over the frames
+  /// with a prediction; NaN: none.
+  double detectorMeanMm = 0, misfitMm = 0;
   std::vector<double> frameMs;     ///< tracker wall time per frame (one thread), ms
   std::vector<double> frameCpuMs;  ///< CPU time of that thread in track(), ms: on a loaded
                                    ///< machine wall time grows, CPU time much less

@@ -5,7 +5,9 @@ Reproducible from seeds: the data comes from `dynahand detector data` (synthetic
 function of (seed, i)); torch is seeded; one run on Debian's python3-torch (CPU).
 
   /usr/bin/python3 train/train_detector.py --dynahand build/release/apps/dynahand \
-      --out models/detector            # the shipped weights (about 35 min on 2 cores)
+      --out models/detector            # the shipped weights (about 50 min on 2 cores)
+  /usr/bin/python3 train/train_detector.py --dynahand build/release/apps/dynahand \
+      --out /tmp/f --init models/detector/detector.onnx --epochs 7 --lr 4e-4   # fine-tuning
   /usr/bin/python3 train/train_detector.py --dynahand ... --out /tmp/d --quick   # a few steps
 
 Writes OUT/detector.onnx and OUT/detector.json (the model card's figures, measured by
@@ -53,7 +55,7 @@ def read_data(path):
     return np.ascontiguousarray(data["pixels"]), np.ascontiguousarray(data["uvd"])
 
 
-def build_detector():
+def build_detector(batch_norm=True):
     """64x64 depth crop -> 21 x (u, v, d) and 21 confidences (84 values).
 
     Integral regression: a small encoder-decoder gives each keypoint a 16x16 heat map and a
@@ -61,10 +63,17 @@ def build_detector():
     and its depth the heat-weighted mean of the depth map. Convolutions keep the position of
     what they see, which a fully connected regressor has to learn; the soft-argmax is formed
     from MatMul and Softmax so that OpenCV's DNN runs the whole network (opset 11).
+
+    Without batch_norm each convolution has a bias instead: the exported graph (where the
+    exporter folds batch normalisation into the convolutions) as a trainable network, which
+    is what a fine-tuning run starts from (load_onnx_weights).
     """
     width = 32  # channels at 16x16
 
     def conv(cin, cout, stride=1, kernel=3):
+        if not batch_norm:
+            return nn.Sequential(nn.Conv2d(cin, cout, kernel, stride, kernel // 2, bias=True),
+                                 nn.ReLU(inplace=True))
         return nn.Sequential(nn.Conv2d(cin, cout, kernel, stride, kernel // 2, bias=False),
                              nn.BatchNorm2d(cout), nn.ReLU(inplace=True))
 
@@ -106,6 +115,33 @@ def build_detector():
             return torch.cat([points, confidence], dim=1)
 
     return Detector()
+
+
+def load_onnx_weights(model, path):
+    """Copies an exported detector's weights (detector.onnx) into a network built without batch
+    normalisation: the graph's convolutions in order are the network's, then the confidence
+    layer's Gemm."""
+    import onnx
+    from onnx import numpy_helper
+    graph = onnx.load(path).graph
+    values = {t.name: numpy_helper.to_array(t).copy() for t in graph.initializer}
+    convs = [m for m in model.modules() if isinstance(m, nn.Conv2d)]
+    nodes = [n for n in graph.node if n.op_type == "Conv"]
+    gemms = [n for n in graph.node if n.op_type == "Gemm"]
+    if len(nodes) != len(convs) or len(gemms) != 1:
+        raise ValueError(f"{path}: {len(nodes)} convolutions and {len(gemms)} Gemm, not the "
+                         f"detector's {len(convs)} and 1")
+    with torch.no_grad():
+        for conv, node in zip(convs, nodes):
+            weight, bias = values[node.input[1]], values[node.input[2]]
+            if tuple(weight.shape) != tuple(conv.weight.shape):
+                raise ValueError(f"{path}: convolution {node.input[1]} is {weight.shape}, the "
+                                 f"detector's {tuple(conv.weight.shape)}")
+            conv.weight.copy_(torch.from_numpy(weight))
+            conv.bias.copy_(torch.from_numpy(bias))
+        gemm = gemms[0]
+        model.confidence.weight.copy_(torch.from_numpy(values[gemm.input[1]]))
+        model.confidence.bias.copy_(torch.from_numpy(values[gemm.input[2]]))
 
 
 def import_dynahand(exe, module_dir=None):
@@ -230,6 +266,9 @@ def main():
     p.add_argument("--lr", type=float, default=2e-3)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--init", default=None,
+                   help="fine-tune: start from this detector.onnx (its folded weights, no batch "
+                        "normalisation) instead of random weights")
     p.add_argument("--quick", action="store_true", help="a few steps on a small set (CI)")
     p.add_argument("--skip-if-no-torch", action="store_true",
                    help="exit 77 (CTest's skip) when python3-torch is not installed")
@@ -257,7 +296,11 @@ def main():
     pixels, uvd = read_data(train_path)
     held_pixels, held_uvd = read_data(held_path)
 
-    model = build_detector()
+    model = build_detector(batch_norm=a.init is None)
+    if a.init:
+        load_onnx_weights(model, a.init)
+        print(f"detector: fine-tuning {a.init}: held-back {evaluate(model, held_pixels, held_uvd):.2f} mm "
+              "at the start", flush=True)
     params = sum(p.numel() for p in model.parameters())
     steps = max(1, int(a.epochs * len(pixels) / a.batch))
     optimiser = torch.optim.AdamW(model.parameters(), lr=a.lr, weight_decay=1e-4)
@@ -300,7 +343,7 @@ def main():
         "format": "dynahand-detector-card", "version": 1,
         "input": [1, 1, CROP, CROP], "output": KEYPOINTS * 4, "parameters": params,
         "training": {"command": " ".join(["train/train_detector.py"] + sys.argv[1:]),
-                     "seed": a.seed, "train_samples": a.train_count, "epochs": a.epochs,
+                     "seed": a.seed, "init": a.init, "train_samples": a.train_count, "epochs": a.epochs,
                      "batch": a.batch, "lr": a.lr, "threads": a.threads,
                      "data_seconds": round(data_s), "train_seconds": round(train_s),
                      "torch": torch.__version__},
@@ -309,6 +352,15 @@ def main():
         "figures": {"eval_args": eval_args, "mean_mm": measured["mean_mm"],
                     "p95_mm": measured["p95_mm"], "mean_confidence": measured["mean_confidence"]},
     }
+    if a.init:
+        # The run this one fine-tuned, from the card beside its weights: the shipped weights'
+        # whole recipe is then in one card.
+        base_card = os.path.join(os.path.dirname(os.path.abspath(a.init)), "detector.json")
+        if os.path.exists(base_card):
+            with open(base_card) as f:
+                base = json.load(f)
+            card["training"]["base"] = {"training": base.get("training"),
+                                        "figures": base.get("figures")}
     with open(os.path.join(a.out, "detector.json"), "w") as f:
         json.dump(card, f, indent=2)
         f.write("\n")

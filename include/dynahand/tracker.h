@@ -59,10 +59,13 @@ struct DetectorSettings {
   /// engages the detector-fit simulation on more frames (more accurate, about 0.3-0.45 ms a
   /// frame more at 1 cm than at 2 cm on the Xeon of docs/performance.md).
   float engageDistanceM = 0.01f;
-  /// A detection whose confident keypoints lie farther than this (m, median) from this hand's
-  /// nearest sample points is not used: joints lie within a finger's radius of the visible
-  /// skin or a hand's thickness behind it, and a detection off the cloud (an arm read as a
-  /// hand, a crop around the wrong surface) would pull the hand away from its data.
+  /// A detection whose confident keypoints lie farther than this (m, median) from the surface
+  /// this hand's sample points show is not used. Seen from the camera, a keypoint is as far
+  /// from it as it lies across the nearest point's line of sight, plus how far it lies in
+  /// front of that point or more than a fist's depth (7 cm) behind it: joints hidden behind
+  /// the visible skin (the fingers of a fist seen from behind) are on the data, and a
+  /// detection beside the hand or in the space the camera sees through (a crop around the
+  /// wrong surface) would pull the hand away from its data.
   float maxOffCloudM = 0.04f;
   /// Loss test: when the tracked keypoints stay farther than disagreeDistanceM (m, mean over
   /// the confident keypoints of a detection used as above) from the detector's for

@@ -16,7 +16,10 @@ constexpr int kMinPoints = 20;  // fewer sample points: no hand in view
 // A detected keypoint, bound to its body, pulls like this many samples (times its
 // confidence).
 constexpr float kDetectorLabelCap = 8.0f;
-constexpr std::size_t kMinFitKeypoints = 8;   // fewer confident keypoints: no fitted pose
+constexpr std::size_t kMinFitKeypoints = 8;  // fewer confident keypoints: no fitted pose
+// A joint may lie this far (m) behind the visible surface: the fingers of a fist seen from
+// behind lie up to about a fist's depth behind the back of the hand.
+constexpr float kHiddenDepthM = 0.07f;
 constexpr float kOffHandTipPenaltyM = 0.05f;  // acquisition: per fingertip over background
 // A frame that starts within this mean distance (m) of the detector's keypoints fits them from
 // its own joint angles, in at most kWarmFitIterations: it is in the right basin already, and
@@ -159,7 +162,19 @@ float HandTracker::medianDistanceToPoints(std::span<const Vec3> keypoints,
   offCloud_.clear();
   for (const Vec3& k : keypoints) {
     float nearest2 = std::numeric_limits<float>::infinity();
-    for (const Vec3& p : points) nearest2 = std::min(nearest2, (p - k).squaredNorm());
+    if (k.z() > 0.0f) {
+      // Hidden behind the skin the camera sees is on the data; in front of it (space the
+      // camera sees through) or beside it is not. The keypoint moves along its line of sight
+      // to each point's depth, so what is left across is the distance from that line.
+      const float inverseZ = 1.0f / k.z();
+      for (const Vec3& p : points) {
+        const float scale = p.z() * inverseZ;
+        const float across2 = Vec2(p.x() - k.x() * scale, p.y() - k.y() * scale).squaredNorm();
+        const float behind = k.z() - p.z();
+        const float along = behind < 0.0f ? -behind : std::max(0.0f, behind - kHiddenDepthM);
+        nearest2 = std::min(nearest2, across2 + along * along);
+      }
+    }
     offCloud_.push_back(nearest2);
   }
   const auto middle = offCloud_.begin() + static_cast<std::ptrdiff_t>(offCloud_.size() / 2);

@@ -130,8 +130,9 @@ class HandTracker {
   // the detector; at DetectorSettings::disagreeFrames the detector-fit lane replaces it.
   // Returns the lane to keep.
   const Lane* checkAgainstDetector(const HandFrame& frame, const Lane* best);
-  // Median over `keypoints` of the distance (m) to the nearest of `points`; infinity without
-  // points.
+  // Median over `keypoints` of how far (m) each lies from the surface `points` sample, seen
+  // from the camera: its distance from the nearest point's line of sight plus how far it lies
+  // in front of that point or more than kHiddenDepthM behind it. Infinity without points.
   float medianDistanceToPoints(std::span<const Vec3> keypoints, std::span<const Vec3> points);
   // A simulator's last nearest bodies over all of the frame's points, for the metric: the
   // simulations' own where they ran on thinned points (palmPointCap), else the frame start's.

@@ -353,7 +353,7 @@ def main():
                     "p95_mm": measured["p95_mm"], "mean_confidence": measured["mean_confidence"]},
     }
     if a.init:
-        # The run this one fine-tuned, from the card beside its weights: the shipped weights'
+        # The run this one fine-tuned, from the card beside its weights: a fine-tuned network's
         # whole recipe is then in one card.
         base_card = os.path.join(os.path.dirname(os.path.abspath(a.init)), "detector.json")
         if os.path.exists(base_card):

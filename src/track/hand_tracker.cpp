@@ -148,7 +148,7 @@ void HandTracker::prepareDetectorEvidence(const HandFrame& frame) {
         {d->points[i], BodyMask{1} << body, kDetectorLabelCap * d->confidence[i]});
   }
   if (fitIndices_.size() < kMinFitKeypoints ||
-      medianDistanceToPoints(fitTargets_, frame.points) > s.maxOffCloudM) {
+      medianDistanceFromSurface(fitTargets_, frame.points) > s.maxOffCloudM) {
     detectorLabels_.clear();
     confidentKeypoints_.clear();
     return;
@@ -156,8 +156,8 @@ void HandTracker::prepareDetectorEvidence(const HandFrame& frame) {
   keypoints_ = d;
 }
 
-float HandTracker::medianDistanceToPoints(std::span<const Vec3> keypoints,
-                                          std::span<const Vec3> points) {
+float HandTracker::medianDistanceFromSurface(std::span<const Vec3> keypoints,
+                                             std::span<const Vec3> points) {
   if (points.empty()) return std::numeric_limits<float>::infinity();
   offCloud_.clear();
   for (const Vec3& k : keypoints) {

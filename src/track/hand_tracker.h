@@ -133,7 +133,7 @@ class HandTracker {
   // Median over `keypoints` of how far (m) each lies from the surface `points` sample, seen
   // from the camera: its distance from the nearest point's line of sight plus how far it lies
   // in front of that point or more than kHiddenDepthM behind it. Infinity without points.
-  float medianDistanceToPoints(std::span<const Vec3> keypoints, std::span<const Vec3> points);
+  float medianDistanceFromSurface(std::span<const Vec3> keypoints, std::span<const Vec3> points);
   // A simulator's last nearest bodies over all of the frame's points, for the metric: the
   // simulations' own where they ran on thinned points (palmPointCap), else the frame start's.
   std::span<const int> metricHints(const Simulator& simulator, std::vector<int>& buffer) const;
@@ -176,7 +176,7 @@ class HandTracker {
   bool haveDetectorPose_ = false;
   bool detectorPoseTried_ = false;
   std::vector<int> confidentKeypoints_;  // of the 21, those used this frame
-  std::vector<float> offCloud_;          // medianDistanceToPoints' scratch (m^2)
+  std::vector<float> offCloud_;          // medianDistanceFromSurface' scratch (m^2)
   const detect::DetectedKeypoints* keypoints_ = nullptr;
   int disagreeFrames_ = 0;
   Keypoints21 scratchKeypoints_{};

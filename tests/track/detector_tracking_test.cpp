@@ -29,6 +29,18 @@ double meanKeypointError(const Keypoints21& keypoints, const Keypoints21& truth)
   return sum / static_cast<double>(truth.size());
 }
 
+// The true keypoints moved by `offset` (m) as a confident detection (0.9 each).
+detect::DetectedKeypoints truthMovedBy(const Keypoints21& truth, const Vec3& offset) {
+  detect::DetectedKeypoints detection;
+  detection.valid = true;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    detection.points[k] = truth[k] + offset;
+    detection.confidence[k] = 0.9f;
+  }
+  detection.meanConfidence = 0.9f;
+  return detection;
+}
+
 // Mean 21-keypoint error (m) over frames [from, count) of the sequence played from frame
 // `first`, ground-truth start.
 double trackMeanError(synth::SyntheticSequence& seq, const TrackerSettings& settings, int from,
@@ -173,13 +185,7 @@ TEST(DetectorTracking, ADetectionOffTheHandsPointsIsNotUsed) {
     auto hand = HandTracker::create(seq->model(0), model::Side::Right, TrackerSettings{});
     ASSERT_TRUE(hand) << hand.message();
     (*hand)->initialize(frame.hands[0].pose);
-    detect::DetectedKeypoints detection;
-    detection.valid = true;
-    for (std::size_t k = 0; k < 21; ++k) {
-      detection.points[k] = frame.hands[0].keypoints[k] + offset;
-      detection.confidence[k] = 0.9f;
-    }
-    detection.meanConfidence = 0.9f;
+    const detect::DetectedKeypoints detection = truthMovedBy(frame.hands[0].keypoints, offset);
     HandFrame in;
     in.points = cloud.points;
     in.planes = cloud.planes;
@@ -213,13 +219,7 @@ TEST(DetectorTracking, AFistSeenFromBehindIsOnTheData) {
     auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
     ASSERT_TRUE(tracker) << tracker.message();
     (*tracker)->initialize(frame.hands[0].pose);
-    detect::DetectedKeypoints detection;
-    detection.valid = true;
-    for (std::size_t k = 0; k < 21; ++k) {
-      detection.points[k] = frame.hands[0].keypoints[k] + offset;
-      detection.confidence[k] = 0.9f;
-    }
-    detection.meanConfidence = 0.9f;
+    const detect::DetectedKeypoints detection = truthMovedBy(frame.hands[0].keypoints, offset);
     (*tracker)->setKeypoints(detection, model::Side::Right);
     const HandResult& r = (*tracker)->track(frame.depth).hands[0];
     EXPECT_TRUE(r.tracked);

@@ -9,6 +9,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -32,6 +33,7 @@ struct BenchOptions {
   bool quick = false;
   bool noDetector = false;             // every item without the learned detector (an ablation)
   float keypointsFromTruthMm = -1.0f;  // >= 0: ground-truth keypoints with this noise, mm
+  std::string trueShape;               // empty: the default hand; else which factors it takes
   std::string rows;                    // only the items whose row label contains this (empty: all)
   bool items = false;                  // one line per item after each table
   // --suite soak
@@ -193,6 +195,14 @@ std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const B
     for (eval::SuiteItem& item : items) item.tracker.detector.enabled = false;
   if (o.keypointsFromTruthMm >= 0.0f)
     for (eval::SuiteItem& item : items) item.truthKeypointsNoiseM = 0.001f * o.keypointsFromTruthMm;
+  if (!o.trueShape.empty()) {
+    static const std::map<std::string, eval::TrueShape> kParts = {
+        {"all", eval::TrueShape::All},
+        {"metacarpals", eval::TrueShape::Metacarpals},
+        {"phalanges", eval::TrueShape::Phalanges},
+        {"thickness", eval::TrueShape::Thickness}};
+    for (eval::SuiteItem& item : items) item.trueShape = kParts.at(o.trueShape);
+  }
   return items;
 }
 
@@ -329,6 +339,12 @@ const CommandRegistration kBenchCommand{Command{
                      "standard deviation per axis (mm) instead of the learned detector's: what "
                      "a perfect (0) or a given-noise detector would give")
           ->check(CLI::Range(0.0f, 100.0f));
+      sub.add_option("--true-shape", o->trueShape,
+                     "every item tracked with the default hand shaped like the rendered hand: "
+                     "all its bone length and thickness factors, the metacarpals (where the "
+                     "knuckles and the thumb base sit), the phalanges, or the thicknesses "
+                     "alone; what a model fitted to the user's hand would give")
+          ->check(CLI::IsMember({"all", "metacarpals", "phalanges", "thickness"}));
       sub.add_option("--rows", o->rows,
                      "only the items of the rows whose name contains TEXT (e.g. 'held objects', "
                      "'tof / head'); with --suite all, each suite must have such rows");
@@ -371,6 +387,7 @@ const CommandRegistration kBenchCommand{Command{
         if (o->noDetector) line += " --no-detector";
         if (o->keypointsFromTruthMm >= 0.0f)
           line += fmt::format(" --keypoints-from-truth {}", o->keypointsFromTruthMm);
+        if (!o->trueShape.empty()) line += " --true-shape " + o->trueShape;
         if (!o->rows.empty()) line += " --rows '" + o->rows + "'";
         if (o->items) line += " --items";
         if (o->minutes > 0.0) line += fmt::format(" --minutes {}", o->minutes);

@@ -33,6 +33,26 @@ struct HandDimensions {
   float width = 0.085f;  ///< palm width across the four finger knuckles, m
 };
 
+/// Per-bone departures of a hand from the default proportions (all 1: the default hand).
+/// Bone 0 of a digit runs from the wrist to its base (thumb CMC, finger MCP), so its factor
+/// moves that base along the line from the wrist; bones 1-3 are the next segments out to the
+/// tip (thumb metacarpal, proximal, distal; finger proximal, middle, distal phalanx).
+struct HandShape {
+  /// [digit 0 thumb..4 pinky][bone 0 = wrist->base, 1..3 out to the tip]: length factors
+  std::array<std::array<float, 4>, 5> boneLength = {{{1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f},
+                                                     {1.0f, 1.0f, 1.0f, 1.0f}}};
+  /// factor on each digit's radii, 1 by default
+  std::array<float, 5> fingerThickness = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
+  /// factor on the palm's dorsal-palmar thickness, 1 by default
+  float palmThickness = 1.0f;
+
+  /// Every factor exactly 1.
+  bool identity() const;
+};
+
 /// The file format version written by saveModel (docs/formats/model.md).
 inline constexpr int kModelFormatVersion = 1;
 
@@ -200,7 +220,10 @@ std::string modelToJson(const ArticulatedModel& model);  ///< the exact text sav
 /// The default hand: 17 bodies (0 forearm, 1 palm, 2-4 thumb metacarpal/proximal/distal,
 /// 5-7 index proximal/middle/distal, 8-10 middle, 11-13 ring, 14-16 pinky) and 16 joints
 /// (joint j has child body j + 1), generated from anthropometric proportions.
-ArticulatedModel makeDefaultHand(const HandDimensions& dimensions = {}, Side side = Side::Right);
+/// `shape` stretches single bones and thickens single digits; the default shape is the default
+/// hand bit for bit.
+ArticulatedModel makeDefaultHand(const HandDimensions& dimensions = {}, Side side = Side::Right,
+                                 const HandShape& shape = {});
 
 /// Uniform scaling about each body frame origin: every length times `factor`, masses times
 /// factor^3. factor > 0.

@@ -21,6 +21,7 @@
 
 #include "dynahand/core.h"
 #include "dynahand/depth_frame.h"
+#include "dynahand/model.h"
 
 namespace dynahand::synth {
 
@@ -75,22 +76,9 @@ struct SurfaceRadii {
 
 /// Per-hand shape factors of the rendered hand relative to the tracking model (1 = same):
 /// the ground truth and the render surface take them, the tracker's model does not, so a
-/// benchmark can measure how much a hand shaped unlike the model costs.
-struct HandProportions {
-  /// [finger 0 thumb..4 pinky][bone 0 = wrist->base (metacarpal), 1..3 phalanges], all 1 by default
-  std::array<std::array<float, 4>, 5> boneLength = {{{1.0f, 1.0f, 1.0f, 1.0f},
-                                                     {1.0f, 1.0f, 1.0f, 1.0f},
-                                                     {1.0f, 1.0f, 1.0f, 1.0f},
-                                                     {1.0f, 1.0f, 1.0f, 1.0f},
-                                                     {1.0f, 1.0f, 1.0f, 1.0f}}};
-  /// factor on each finger's render radii, 1 by default
-  std::array<float, 5> fingerThickness = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
-  /// factor on the palm's render half-thickness, 1 by default
-  float palmThickness = 1.0f;
-
-  /// Every factor exactly 1.
-  bool identity() const;
-};
+/// benchmark can measure how much a hand shaped unlike the model costs. The same factors as
+/// model::HandShape, which builds a default hand shaped so (model::makeDefaultHand).
+using HandProportions = model::HandShape;
 
 /// Each factor uniform in [1-spread, 1+spread], deterministic from seed (portable: the same
 /// numbers on every platform). spread 0 gives all ones.

@@ -126,13 +126,15 @@ void addForearm(SpecBuilder& b, float L, float W) {
 
 // 1 palm: wrist section, mid-palm section and a flattened ball around each knuckle (mcp);
 // the wrist joint and the wrist and palm keypoints (MediaPipe wrist = the wrist joint centre).
-void addPalm(SpecBuilder& b, const std::array<Vec3, 4>& mcp, float L, float W) {
+void addPalm(SpecBuilder& b, const std::array<Vec3, 4>& mcp, float L, float W,
+             const HandShape& shape) {
   std::vector<Vec3> points;
-  addRing(points, Vec3(0, 0, -0.1f * W), 0.26f * W, 0.13f * W, 16);  // heel of the palm
-  addRing(points, Vec3(0, 0, 0), 0.34f * W, 0.19f * W, 16);
-  addRing(points, Vec3(0, -0.02f * W, 0.22f * L), 0.46f * W, 0.18f * W, 16);
+  const float t = shape.palmThickness;
+  addRing(points, Vec3(0, 0, -0.1f * W), 0.26f * W, 0.13f * W * t, 16);  // heel of the palm
+  addRing(points, Vec3(0, 0, 0), 0.34f * W, 0.19f * W * t, 16);
+  addRing(points, Vec3(0, -0.02f * W, 0.22f * L), 0.46f * W, 0.18f * W * t, 16);
   for (size_t f = 0; f < 4; ++f) {
-    const float r = kFingers[f].radius * W;
+    const float r = kFingers[f].radius * W * shape.fingerThickness[f + 1];
     addEllipsoid(points, mcp[f], Vec3(r, 1.2f * r, r), 3, 8);
   }
   b.body("palm", std::move(points));
@@ -146,8 +148,8 @@ void addPalm(SpecBuilder& b, const std::array<Vec3, 4>& mcp, float L, float W) {
 // 2-4 thumb. The carpometacarpal joint sits radial and volar near the wrist; at rest the thumb
 // points distally, radially and slightly volar, its nail turned toward the radial side, so
 // flexion (about its x) sweeps it across the palm.
-void addThumb(SpecBuilder& b, float L, float W) {
-  const Vec3 cmc(0.25f * W, -0.08f * W, 0.11f * L);
+void addThumb(SpecBuilder& b, float L, float W, const HandShape& shape) {
+  const Vec3 cmc = Vec3(0.25f * W, -0.08f * W, 0.11f * L) * shape.boneLength[0][0];
   const Vec3 z = Vec3(0.52f, -0.22f, 0.82f).normalized();
   const Vec3 y = (Vec3(0.8f, 0.6f, 0.0f) - z * z.dot(Vec3(0.8f, 0.6f, 0.0f))).normalized();
   Mat3 axes;
@@ -155,8 +157,11 @@ void addThumb(SpecBuilder& b, float L, float W) {
   axes.col(1) = y;
   axes.col(2) = z;
   const Quat restFrame(axes);
-  const std::array<float, 3> lengths = {0.251f * L, 0.196f * L, 0.158f * L};
-  const std::array<float, 4> radii = {0.17f * W, 0.13f * W, 0.115f * W, 0.10f * W};
+  const auto& stretch = shape.boneLength[0];
+  const std::array<float, 3> lengths = {0.251f * L * stretch[1], 0.196f * L * stretch[2],
+                                        0.158f * L * stretch[3]};
+  const float t = shape.fingerThickness[0];
+  const std::array<float, 4> radii = {0.17f * W * t, 0.13f * W * t, 0.115f * W * t, 0.10f * W * t};
   const char* names[3] = {"thumb_metacarpal", "thumb_proximal", "thumb_distal"};
   const char* keys[4] = {"thumb_cmc", "thumb_mcp", "thumb_ip", "thumb_tip"};
   for (size_t i = 0; i < 3; ++i) {
@@ -174,31 +179,47 @@ void addThumb(SpecBuilder& b, float L, float W) {
 }
 
 // 5-16 fingers: proximal, middle, distal phalanx each, from the knuckle at mcp.
-void addFinger(SpecBuilder& b, const FingerShape& finger, const Vec3& mcp, float L, float W) {
+// `digit` 1-4 indexes `shape` (0 is the thumb).
+void addFinger(SpecBuilder& b, const FingerShape& finger, const Vec3& mcp, float L, float W,
+               const HandShape& shape, size_t digit) {
   const std::string n = finger.name;
-  const float base = finger.radius * W;
+  const float base = finger.radius * W * shape.fingerThickness[digit];
+  const auto& stretch = shape.boneLength[digit];
+  const std::array<float, 3> lengths = {finger.lengths[0] * L * stretch[1],
+                                        finger.lengths[1] * L * stretch[2],
+                                        finger.lengths[2] * L * stretch[3]};
   for (size_t i = 0; i < 3; ++i) {
     const float r0 = kTaper[i] * base;
     const float r1 = kTaper[i + 1] * base;
-    const float length = finger.lengths[i] * L;
+    const float length = lengths[i];
     b.body(n + "_" + kPhalanx[i], capsule(r0, r1, i == 2 ? length - r1 : length));
     b.keypoint(n + "_" + kJointName[i], n + "_" + kPhalanx[i], Vec3::Zero(), r0);
   }
-  b.keypoint(n + "_tip", n + "_distal", Vec3(0, 0, finger.lengths[2] * L), kTaper[3] * base);
+  b.keypoint(n + "_tip", n + "_distal", Vec3(0, 0, lengths[2]), kTaper[3] * base);
   // Metacarpal bases converge toward the wrist (OpenXR metacarpal joints).
   b.keypoint(n + "_cmc", "palm", Vec3(0.6f * mcp.x(), mcp.y(), 0.2f * mcp.z()), 0.8f * base);
   const Quat splay(Eigen::AngleAxisf(finger.splayDeg * kDeg, Vec3::UnitY()));
   b.joint("palm", n + "_proximal", mcp, splay, degrees(-25, finger.minAbductionDeg, -5),
           degrees(95, finger.maxAbductionDeg, 5));
-  b.joint(n + "_proximal", n + "_middle", Vec3(0, 0, finger.lengths[0] * L), Quat::Identity(),
+  b.joint(n + "_proximal", n + "_middle", Vec3(0, 0, lengths[0]), Quat::Identity(),
           degrees(-5, 0, 0), degrees(110, 0, 0));
-  b.joint(n + "_middle", n + "_distal", Vec3(0, 0, finger.lengths[1] * L), Quat::Identity(),
+  b.joint(n + "_middle", n + "_distal", Vec3(0, 0, lengths[1]), Quat::Identity(),
           degrees(-10, 0, 0), degrees(85, 0, 0));
 }
 
 }  // namespace
 
-ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
+bool HandShape::identity() const {
+  for (const auto& digit : boneLength)
+    for (float f : digit)
+      if (f != 1.0f) return false;
+  for (float f : fingerThickness)
+    if (f != 1.0f) return false;
+  return palmThickness == 1.0f;
+}
+
+ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side,
+                                 const HandShape& shape) {
   const float L = dimensions.length;
   const float W = dimensions.width;
   assert(L > 0.0f && W > 0.0f && "hand dimensions must be positive");
@@ -213,11 +234,12 @@ ArticulatedModel makeDefaultHand(const HandDimensions& dimensions, Side side) {
   SpecBuilder builder{spec};
   std::array<Vec3, 4> mcp;
   for (size_t f = 0; f < 4; ++f)
-    mcp[f] = Vec3(kFingers[f].mcpX * W, kFingers[f].mcpY * W, kFingers[f].mcpZ * L);
+    mcp[f] = Vec3(kFingers[f].mcpX * W, kFingers[f].mcpY * W, kFingers[f].mcpZ * L) *
+             shape.boneLength[f + 1][0];
   addForearm(builder, L, W);
-  addPalm(builder, mcp, L, W);
-  addThumb(builder, L, W);
-  for (size_t f = 0; f < 4; ++f) addFinger(builder, kFingers[f], mcp[f], L, W);
+  addPalm(builder, mcp, L, W, shape);
+  addThumb(builder, L, W, shape);
+  for (size_t f = 0; f < 4; ++f) addFinger(builder, kFingers[f], mcp[f], L, W, shape, f + 1);
 
   // Joint order must match the body order (joint j has child j + 1): thumb joints were added
   // before the finger joints, as the bodies were.

@@ -95,15 +95,6 @@ void buildHandSurface(const HandSkeleton& hand, const SurfaceRadii& radii,
   (void)firstPrimitive;
 }
 
-bool HandProportions::identity() const {
-  for (const auto& finger : boneLength)
-    for (float f : finger)
-      if (f != 1.0f) return false;
-  for (float f : fingerThickness)
-    if (f != 1.0f) return false;
-  return palmThickness == 1.0f;
-}
-
 HandProportions randomProportions(std::uint64_t seed, float spread) {
   HandProportions p;
   if (spread == 0.0f) return p;

@@ -450,6 +450,23 @@ void append(SequenceKeypoints& to, const SequenceKeypoints& from) {
 
 }  // namespace
 
+model::HandShape trackerShape(const synth::HandProportions& proportions, TrueShape part) {
+  model::HandShape shape;
+  if (part == TrueShape::None) return shape;
+  for (std::size_t d = 0; d < shape.boneLength.size(); ++d)
+    for (std::size_t b = 0; b < shape.boneLength[d].size(); ++b) {
+      const bool metacarpal = b == 0;
+      if (part == TrueShape::All || (part == TrueShape::Metacarpals && metacarpal) ||
+          (part == TrueShape::Phalanges && !metacarpal))
+        shape.boneLength[d][b] = proportions.boneLength[d][b];
+    }
+  if (part == TrueShape::All || part == TrueShape::Thickness) {
+    shape.fingerThickness = proportions.fingerThickness;
+    shape.palmThickness = proportions.palmThickness;
+  }
+  return shape;
+}
+
 Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   synth::SynthOptions so;
   so.clip = item.clip;
@@ -473,13 +490,21 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   track::TrackerSettings settings = item.tracker;
   settings.keepCandidates = false;  // no pictures here
   settings.cloud.segmentation.sensorMinRangeM = seq->profile().minRange;
-  auto tracker = track::Tracker::create(seq->model(0), seq->intrinsics(), settings);
+  const model::ArticulatedModel& handModel = seq->model(0);
+  const model::ArticulatedModel shapedModel =
+      item.trueShape == TrueShape::None
+          ? handModel
+          : model::makeDefaultHand(so.hand,
+                                   handModel.metadata().handedness == model::Handedness::Left
+                                       ? model::Side::Left
+                                       : model::Side::Right,
+                                   trackerShape(so.proportions, item.trueShape));
+  auto tracker = track::Tracker::create(shapedModel, seq->intrinsics(), settings);
   if (!tracker) return Error{tracker.message()};
   SuiteItemResult result;
   result.item = item;
   result.keypoints.fps = static_cast<double>(so.framesPerSecond);
   std::mt19937 noise(static_cast<std::uint32_t>(nameSeed(item.clip) ^ item.seed));
-  const model::ArticulatedModel& handModel = seq->model(0);
   model::KeypointFitter misfitFitter(handModel);
   for (int f = 0; f < item.frames; ++f) {
     const synth::SyntheticFrame& frame = seq->frame(f);

@@ -66,6 +66,43 @@ TEST(MotionSuite, ClipsOnEveryProfileAndPlacementWithVariedHands) {
   EXPECT_NE(seedOf("wave", "tof"), seedOf("pinch", "tof"));
 }
 
+TEST(MotionSuite, TrueShapeGivesTheModelTheChosenFactorsOfTheRenderedHand) {
+  const synth::HandProportions p = synth::randomProportions(4, 0.15f);
+  EXPECT_TRUE(trackerShape(p, TrueShape::None).identity());
+  const model::HandShape all = trackerShape(p, TrueShape::All);
+  EXPECT_EQ(all.boneLength, p.boneLength);
+  EXPECT_EQ(all.fingerThickness, p.fingerThickness);
+  EXPECT_EQ(all.palmThickness, p.palmThickness);
+  const model::HandShape metacarpals = trackerShape(p, TrueShape::Metacarpals);
+  const model::HandShape phalanges = trackerShape(p, TrueShape::Phalanges);
+  const model::HandShape thickness = trackerShape(p, TrueShape::Thickness);
+  for (std::size_t d = 0; d < 5; ++d) {
+    for (std::size_t b = 0; b < 4; ++b) {
+      EXPECT_EQ(metacarpals.boneLength[d][b], b == 0 ? p.boneLength[d][b] : 1.0f);
+      EXPECT_EQ(phalanges.boneLength[d][b], b == 0 ? 1.0f : p.boneLength[d][b]);
+      EXPECT_EQ(thickness.boneLength[d][b], 1.0f);
+    }
+    EXPECT_EQ(metacarpals.fingerThickness[d], 1.0f);
+    EXPECT_EQ(thickness.fingerThickness[d], p.fingerThickness[d]);
+  }
+  EXPECT_EQ(thickness.palmThickness, p.palmThickness);
+  // Tracked with the model shaped like the rendered hand, an item is more accurate.
+  SuiteItem item;
+  item.clip = "open-close";
+  item.profile = "tof";
+  item.frames = 30;
+  item.speed = 2.5f;
+  item.proportionSpread = 0.15f;
+  item.proportionSeed = 4;
+  const Result<SuiteItemResult> plain = runSuiteItem(item);
+  item.trueShape = TrueShape::All;
+  const Result<SuiteItemResult> shaped = runSuiteItem(item);
+  ASSERT_TRUE(plain.ok() && shaped.ok());
+  EXPECT_LT(shaped->metrics.meanMm, plain->metrics.meanMm);
+  // The misfit stays that of the default model.
+  EXPECT_EQ(shaped->misfitMm, plain->misfitMm);
+}
+
 TEST(MotionSuite, ReacquisitionIsCountedFromEachCutUntilTheNext) {
   SuiteItem item;
   item.group = "continuous";

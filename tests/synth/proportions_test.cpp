@@ -94,6 +94,36 @@ TEST(HandProportions, EachBoneStretchesAboutItsParentMovingTheChildrenAlong) {
   for (std::size_t i : {0u, 1u, 4u, 9u, 12u, 20u}) EXPECT_EQ(shifted[i], before[i]);
 }
 
+// model::makeDefaultHand given the proportions is the rendered hand's skeleton: in any pose its
+// keypoints are the default hand's stretched by applyProportions (the benchmark's
+// `--true-shape`), and the thickness factors widen the digits' keypoint radii.
+TEST(HandProportions, TheModelShapedByThemHasTheStretchedSkeleton) {
+  const model::ArticulatedModel plain = model::makeDefaultHand();
+  const HandProportions p = randomProportions(3, 0.15f);
+  const model::ArticulatedModel shaped = model::makeDefaultHand({}, model::Side::Right, p);
+  ASSERT_EQ(shaped.bodies().size(), plain.bodies().size());
+  for (const char* clip : {"count", "pinch", "wave"}) {
+    Result<std::vector<HandMotionSample>> s = sampleClip(clip, plain, 0.7f);
+    ASSERT_TRUE(s.ok());
+    const model::JointAngles& angles = (*s)[0].angles;
+    HandKeypoints expected = model::keypoints21(plain, model::forwardKinematics(plain, angles));
+    applyProportions(p, expected);
+    const HandKeypoints got = model::keypoints21(shaped, model::forwardKinematics(shaped, angles));
+    for (std::size_t i = 0; i < 21; ++i)
+      EXPECT_LT((got[i] - expected[i]).norm(), 1e-5f) << clip << " keypoint " << i;
+  }
+  // Thicker digits: each digit's keypoint radii scale with its factor; the default shape is the
+  // default hand bit for bit.
+  const auto& indices = plain.keypoints21Indices();
+  for (int f = 0; f < 5; ++f) {
+    const auto tip = static_cast<std::size_t>(indices[static_cast<std::size_t>(4 * f + 4)]);
+    EXPECT_FLOAT_EQ(shaped.keypoints()[tip].radius,
+                    plain.keypoints()[tip].radius * p.fingerThickness[static_cast<std::size_t>(f)]);
+  }
+  EXPECT_EQ(model::modelToJson(model::makeDefaultHand({}, model::Side::Right, HandProportions{})),
+            model::modelToJson(plain));
+}
+
 TEST(HandProportions, ScaledRadiiMultiplyFingersAndPalm) {
   HandProportions p;
   p.fingerThickness = {1.1f, 0.9f, 1.0f, 1.2f, 0.8f};

@@ -39,6 +39,15 @@ const std::vector<HandSize>& benchHandSizes();
 /// flip), grasp-cylinder (grasp bias).
 const std::vector<std::string>& targetedAblationClips();
 
+/// Which shape factors of the rendered hand a benchmark item gives the tracker's model.
+enum class TrueShape {
+  None,         ///< the default proportions (the hand's shape unknown, as for a user)
+  All,          ///< every bone length and thickness factor
+  Metacarpals,  ///< bone 0 of each digit alone: where the knuckles and the thumb base sit
+  Phalanges,    ///< bones 1-3 of each digit alone
+  Thickness,    ///< the finger and palm thickness factors alone
+};
+
 /// One benchmark item: a clip synthesised on one sensor profile and hand, then tracked.
 struct SuiteItem {
   std::string variant = "all";  ///< "all", "no <strategy>" or "normal only"
@@ -78,7 +87,14 @@ struct SuiteItem {
   /// (Tracker::setKeypoints, confidence 1): what a perfect or a given-noise detector would
   /// give. < 0: the learned detector.
   float truthKeypointsNoiseM = -1.0f;
+  /// Which of the rendered hand's shape factors (synth::HandProportions) the tracker's model
+  /// is given (model::makeDefaultHand with a model::HandShape): what a model shaped like the
+  /// hand would give. None: the default hand, as a user's tracker has.
+  TrueShape trueShape = TrueShape::None;
 };
+
+/// The tracker's model shaped like the rendered hand, from these of its factors.
+model::HandShape trackerShape(const synth::HandProportions& proportions, TrueShape part);
 
 /// What standardSuite builds.
 struct SuiteOptions {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 #include "dynahand/synth.h"
@@ -16,6 +17,17 @@ inline synth::SynthOptions clipOptions(const std::string& clip, const std::strin
   o.clip = clip;
   o.profile = profile;
   o.frameCount = frames;
+  return o;
+}
+
+// Frames [start, start + frames) of animbank.pose (in `data`, ../shared/data) on `profile`.
+inline synth::SynthOptions animbankOptions(const std::filesystem::path& data, int start, int frames,
+                                           const std::string& profile) {
+  synth::SynthOptions o;
+  o.poseFile = data / "intel" / "animbank.pose";
+  o.poseStart = start;
+  o.frameCount = frames;
+  o.profile = profile;
   return o;
 }
 

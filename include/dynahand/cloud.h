@@ -4,7 +4,8 @@
 /// frame, process() fills a reusable CloudFrame:
 ///
 ///   1. coarse search: every `coarseStep`-th pixel, range-gated; region growing from the
-///      nearest samples finds "the closest, sufficiently large volume" and its image box;
+///      nearest samples finds "the closest, sufficiently large volume" and its image box
+///      (with a HandHint, the tracked hand's volume when the closest one does not reach it);
 ///   2. filtering inside that box only, at the working stride (sampleStride): range gate,
 ///      3x3 median, optional bilateral, flying-pixel removal at depth edges;
 ///   3. segmentation: the region grown from the nearest filtered sample across neighbours
@@ -102,6 +103,16 @@ struct SegmentationConfig {
   /// coming nearer is taken as cut off by the sensor (an arm reaching past a head-mounted
   /// camera) and so attached to the body at that end; the hand is at its other end.
   float sensorMinRangeM = 0.20f;
+  /// One hand, with a HandHint (process): when the nearest volume comes no nearer than this
+  /// (m) to the tracked hand's centre while some sample does, the volume is grown from that
+  /// sample instead (an elbow nearer to the camera than the hand at its forearm's end).
+  /// 0 = hints are not used.
+  float hintReachM = 0.06f;
+};
+
+/// Where the tracker saw the hand in the last frame (CloudPipeline::process).
+struct HandHint {
+  Vec3 centre = Vec3::Zero();  ///< m, camera frame: the tracked hand's centre
 };
 
 /// Everything a CloudPipeline is configured with (docs/cloud.md).
@@ -217,7 +228,8 @@ class CloudPipeline {
   /// Fills `out` from one frame. An error (frame size differs from the intrinsics,
   /// non-positive depth scale, buffer size wrong) leaves `out` empty. A frame with no
   /// hand (e.g. all zeros) is not an error: out.segment.found is false, no points.
-  Status process(const DepthFrame& frame, CloudFrame& out);
+  /// hint (optional): where the hand was tracked last frame (SegmentationConfig::hintReachM).
+  Status process(const DepthFrame& frame, CloudFrame& out, const HandHint* hint = nullptr);
 
   const Intrinsics& intrinsics() const;  ///< the camera it was made for
   const CloudConfig& config() const;     ///< the configuration it was made with

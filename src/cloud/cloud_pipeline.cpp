@@ -32,6 +32,10 @@ constexpr float kEndInsideBall = 0.75f;
 // more than kLimbEndMoveFactor hand radii.
 constexpr int kLimbEndRounds = 2;
 constexpr float kLimbEndMoveFactor = 0.5f;
+// A limb's free end within this many hand radii of the tracked hand's centre (HandHint) is
+// that hand: the end lies at its fingertips, about 10 cm from the centre of a hand pointing away
+// from a head-mounted camera (an elbow taken for the hand puts it 30 cm or more away).
+constexpr float kHintLimbEndReach = 1.0f;
 // A limb cut off by the sensor's near range is cut within this depth (m) of its nearest point.
 constexpr float kNearCutDepthM = 0.03f;
 // ... and nearer than this (m), or than kNearCutAboveRangeM beyond the sensor's near range
@@ -81,6 +85,7 @@ struct CloudPipeline::Impl {
   VoxelGrid voxels;
   BoundaryPlaneBuilder planeBuilder;
   cloud::FilterScratch filterScratch;
+  const HandHint* hint = nullptr;  // this frame's (process), or none
   cloud::RegionGrower coarseGrower;
   cloud::RegionGrower fineGrower;
   cloud::LimbEndFinder limbEnd;
@@ -158,6 +163,7 @@ struct CloudPipeline::Impl {
     DepthGrid coarse;
     GrownRegion first;                           // region 1's coarse volume
     int firstSeed = -1;                          // its seed cell
+    bool hintTried = false;                      // keepToTheTrackedHand ran (first round only)
     int regionCount = 0;                         // coarse volumes accepted: 0, 1 or 2
     int minI = 0, maxI = 0, minJ = 0, maxJ = 0;  // their cell box
     // Each region's limb's free end, when haveHandEnd (region 2's with two regions).
@@ -193,6 +199,9 @@ struct CloudPipeline::Impl {
   // 1. The closest sufficiently large coarse volume (and a second within the band); false
   //    when there is none.
   bool findCoarseRegions(Search& s);
+  // The hint's volume in place of region 1 when region 1 (its limb's free end, if it is a
+  // limb) does not reach the hint (one hand); true when it replaced it.
+  bool keepToTheTrackedHand(Search& s);
   // 2. The filter box around the coarse volumes and the working resolution.
   void chooseBoxAndStride(Search& s) const;
   // With two regions, each coarse cell's region or a neighbour's (cells are sampled at their
@@ -297,7 +306,7 @@ const CloudConfig& CloudPipeline::config() const {
   return impl_->config;
 }
 
-Status CloudPipeline::process(const DepthFrame& frame, CloudFrame& out) {
+Status CloudPipeline::process(const DepthFrame& frame, CloudFrame& out, const HandHint* hint) {
   const Intrinsics& k = impl_->k;
   out.points.clear();
   out.pointWeights.clear();
@@ -332,7 +341,10 @@ Status CloudPipeline::process(const DepthFrame& frame, CloudFrame& out) {
     return Error{"depth scale " + std::to_string(frame.depthScale) +
                  " is not a positive number of metres per unit"};
   }
-  return impl_->run(frame, out);
+  impl_->hint = hint;
+  const Status status = impl_->run(frame, out);
+  impl_->hint = nullptr;
+  return status;
 }
 
 bool CloudPipeline::Impl::mergePieces(CellLabel label, GrownRegion& region) {
@@ -478,6 +490,8 @@ bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
   }
   if (s.regionCount == 0) return false;
   s.haveHandEnd[0] = findLimbEnd(s.coarse, s.firstSeed, s.first, s.handEnd[0]);
+  if (keepToTheTrackedHand(s))
+    s.haveHandEnd[0] = findLimbEnd(s.coarse, s.firstSeed, s.first, s.handEnd[0]);
   s.haveHandEnd[1] = false;
   s.minI = s.first.minI;
   s.maxI = s.first.maxI;
@@ -505,6 +519,57 @@ bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
       }
     }
   }
+  return true;
+}
+
+bool CloudPipeline::Impl::keepToTheTrackedHand(Search& s) {
+  const SegmentationConfig& seg = config.segmentation;
+  if (hint == nullptr || s.hintTried || seg.hintReachM <= 0.0f || seg.secondRegionDepthBandM > 0.0f)
+    return false;
+  s.hintTried = true;
+  const DepthGrid& grid = s.coarse;
+  const float reach2 = seg.hintReachM * seg.hintReachM;
+  // A limb: the hand is at its free end (a forearm seen along its length holds the hand beyond
+  // the ball, found there); the hint is within a few cm of the end when it is right.
+  if (s.haveHandEnd[0] &&
+      (s.handEnd[0] - hint->centre).norm() <= kHintLimbEndReach * seg.handRadiusM)
+    return false;
+  // A hint on the volume (a tracker gone astray onto the forearm, say) changes nothing either.
+  const std::vector<std::uint8_t>& labels = coarseGrower.labels();
+  for (int j = s.first.minJ; j <= s.first.maxJ; ++j) {
+    for (int i = s.first.minI; i <= s.first.maxI; ++i) {
+      if (labels[static_cast<std::size_t>(j) * grid.width + i] != cloud::kRegion1) continue;
+      if ((grid.point(k, i, j) - hint->centre).squaredNorm() <= reach2) return false;
+    }
+  }
+  // Grown from the tracked hand's sample, over labels forgotten as for a border volume (a
+  // volume passed over before may hold it).
+  const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
+  coarseGrower.reset(grid, k);
+  const int seed = coarseGrower.closestFreeCell(hint->centre);
+  bool taken = false;
+  if (seed >= 0 &&
+      (grid.point(k, seed % grid.width, seed / grid.width) - hint->centre).squaredNorm() <=
+          reach2) {
+    const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
+    taken = r.areaM2 >= seg.minAreaM2 && !r.inFrontOfSurface;
+    if (taken) {
+      coarseGrower.accept(cloud::kRegion1);
+      s.first = r;
+      s.firstSeed = seed;
+    } else {
+      coarseGrower.reject();
+      coarseGrower.reset(grid, k);
+    }
+  }
+  if (!taken) {  // no volume there (the hand has left it): the nearest volume again
+    s.first = coarseGrower.grow(s.firstSeed, seg.step, coarseRadius, seg.minAreaM2);
+    coarseGrower.accept(cloud::kRegion1);
+  }
+  s.minI = s.first.minI;
+  s.maxI = s.first.maxI;
+  s.minJ = s.first.minJ;
+  s.maxJ = s.first.maxJ;
   return true;
 }
 

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "dynahand/detector.h"
 #include "dynahand/hand_split.h"
@@ -56,6 +57,9 @@ struct Tracker::Impl {
   HandSplit split;
   FingerDetector detector;
   std::unique_ptr<detect::KeypointDetector> keypointDetector;  // null: none
+  // One hand: the centre of its keypoints where it was tracked last frame (the segmentation's
+  // hint); none after a loss, reset() or initialize().
+  std::optional<Vec3> trackedHandCentre;
   detect::HandCrop crop;
   detect::DetectedKeypoints keypoints[2];
   bool givenKeypoints[2] = {false, false};  // keypoints[h] set by setKeypoints for this frame
@@ -143,6 +147,7 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
 void Tracker::initialize(const model::ModelPose& pose, model::Side side) {
   auto& hand = impl_->hands[side == model::Side::Right ? 0 : 1];
   if (hand) hand->initialize(pose);
+  impl_->trackedHandCentre.reset();
 }
 
 Status Tracker::initializeFromKeypoints(const Keypoints21& keypoints, model::Side side) {
@@ -158,6 +163,7 @@ void Tracker::reset() {
     if (hand) hand->reset();
   }
   impl_->splitter.reset();
+  impl_->trackedHandCentre.reset();
 }
 
 void Tracker::setKeypoints(const detect::DetectedKeypoints& keypoints, model::Side side) {
@@ -189,7 +195,11 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
   const double time = frame.timestamp > 0.0
                           ? frame.timestamp
                           : r.frame * static_cast<double>(m.settings.stepDt) * m.settings.substeps;
-  const Status processed = m.pipeline.process(frame, m.cloud);
+  // One hand tracked last frame: the segmentation keeps to it (SegmentationConfig::hintReachM).
+  const bool hinted = m.trackedHandCentre.has_value() && !m.settings.perFrame;
+  HandHint hint;
+  if (hinted) hint.centre = *m.trackedHandCentre;
+  const Status processed = m.pipeline.process(frame, m.cloud, hinted ? &hint : nullptr);
   const bool haveCloud = processed.ok() && m.cloud.segment.found;
   const FingerDetection* detection = nullptr;
   if (haveCloud &&
@@ -284,6 +294,12 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       }
     }
     m.hands[h]->track(in, r.hands[static_cast<std::size_t>(h)]);
+  }
+  m.trackedHandCentre.reset();
+  if (handCount == 1 && r.hands.front().tracked) {
+    Vec3 sum = Vec3::Zero();
+    for (const Vec3& p : r.hands.front().keypoints21) sum += p;
+    m.trackedHandCentre = sum / static_cast<float>(r.hands.front().keypoints21.size());
   }
   r.timeMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

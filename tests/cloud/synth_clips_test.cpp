@@ -13,6 +13,7 @@
 #include "dynahand/hand_split.h"
 #include "dynahand/synth.h"
 #include "dynahand/synth_render.h"
+#include "synth_support.h"
 #include "test_support.h"
 
 namespace dynahand {
@@ -387,6 +388,52 @@ TEST(CloudSynthClips, TwoTouchingHandsAreSplitIntoTheirOwnPoints) {
     ASSERT_GT(all, 0);
     EXPECT_GE(static_cast<double>(own) / static_cast<double>(all), 0.9);
   }
+}
+
+// animbank.pose around frame 1390 from the desk on active-stereo: the arm bent at the elbow, a
+// fist at the forearm's end, and the elbow nearer to the camera than the fist. The nearest
+// volume is the elbow, and the limb search's ball around it ends in the upper arm on one side
+// and the forearm on the other, so its free end lies between them. Told where the tracker had
+// the hand (HandHint), the pipeline keeps to the fist.
+TEST(CloudSynthClips, AnElbowNearerThanTheTrackedFistIsNotTakenForTheHand) {
+  DYNAHAND_REQUIRE_SHARED_DATA(data);
+  synth::SynthOptions options = test::animbankOptions(data, 1386, 12, "active-stereo");
+  options.proportions = synth::randomProportions(1, 0.15f);
+  Result<synth::SyntheticSequence> seq = synth::SyntheticSequence::create(options);
+  ASSERT_TRUE(seq.ok()) << seq.error().message;
+  CloudPipeline pipeline(seq->intrinsics());
+  CloudFrame out;
+  // Share of the segmented points within 12 cm of the hand's centre.
+  const auto onHand = [&](const Vec3& centre) {
+    int near = 0;
+    for (const Vec3& p : out.points) near += (p - centre).norm() <= 0.12f;
+    return out.points.empty() ? 0.0f
+                              : static_cast<float>(near) / static_cast<float>(out.points.size());
+  };
+  int elbowTaken = 0;
+  for (int f = 0; f < options.frameCount; ++f) {
+    const synth::SyntheticFrame& frame = seq->frame(f);
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& p : frame.hands[0].keypoints) centre += p;
+    centre /= 21.0f;
+    ASSERT_TRUE(pipeline.process(frame.depth, out).ok());
+    const float nearest = onHand(centre);
+    // The hint a tracker would give: last frame's hand, here its truth 1 cm off.
+    const HandHint hint{centre + Vec3(0.01f, 0.0f, 0.0f)};
+    ASSERT_TRUE(pipeline.process(frame.depth, out, &hint).ok());
+    const float hinted = onHand(centre);
+    std::printf("frame %d: %.0f%% of the points on the hand nearest-first, %.0f%% hinted\n",
+                1386 + f, 100.0 * static_cast<double>(nearest),
+                100.0 * static_cast<double>(hinted));
+    // The rest of a segment is forearm (about a third here when the fist is taken).
+    EXPECT_GE(hinted, 0.4f) << "frame " << 1386 + f;
+    if (nearest >= 0.4f) {
+      EXPECT_EQ(hinted, nearest) << "frame " << 1386 + f;  // no change where it is right
+    }
+    elbowTaken += nearest < 0.1f;
+  }
+  // Without the hint the elbow is taken on most of these frames.
+  EXPECT_GE(elbowTaken, options.frameCount / 2);
 }
 
 }  // namespace

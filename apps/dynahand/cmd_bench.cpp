@@ -181,6 +181,13 @@ std::string runLine(const SuiteRun& run, int threads) {
       threads > 1 ? " (items run in parallel; each item's frames on one thread)" : "");
 }
 
+// --true-shape's parts by name.
+const std::map<std::string, eval::TrueShape> kTrueShapeParts = {
+    {"all", eval::TrueShape::All},
+    {"metacarpals", eval::TrueShape::Metacarpals},
+    {"phalanges", eval::TrueShape::Phalanges},
+    {"thickness", eval::TrueShape::Thickness}};
+
 // The items as the options ask: those of the rows --rows names, without the learned detector
 // when --no-detector.
 std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const BenchOptions& o) {
@@ -195,14 +202,8 @@ std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const B
     for (eval::SuiteItem& item : items) item.tracker.detector.enabled = false;
   if (o.keypointsFromTruthMm >= 0.0f)
     for (eval::SuiteItem& item : items) item.truthKeypointsNoiseM = 0.001f * o.keypointsFromTruthMm;
-  if (!o.trueShape.empty()) {
-    static const std::map<std::string, eval::TrueShape> kParts = {
-        {"all", eval::TrueShape::All},
-        {"metacarpals", eval::TrueShape::Metacarpals},
-        {"phalanges", eval::TrueShape::Phalanges},
-        {"thickness", eval::TrueShape::Thickness}};
-    for (eval::SuiteItem& item : items) item.trueShape = kParts.at(o.trueShape);
-  }
+  if (!o.trueShape.empty())
+    for (eval::SuiteItem& item : items) item.trueShape = kTrueShapeParts.at(o.trueShape);
   return items;
 }
 
@@ -344,7 +345,7 @@ const CommandRegistration kBenchCommand{Command{
                      "all its bone length and thickness factors, the metacarpals (where the "
                      "knuckles and the thumb base sit), the phalanges, or the thicknesses "
                      "alone; what a model fitted to the user's hand would give")
-          ->check(CLI::IsMember({"all", "metacarpals", "phalanges", "thickness"}));
+          ->check(CLI::IsMember(kTrueShapeParts));
       sub.add_option("--rows", o->rows,
                      "only the items of the rows whose name contains TEXT (e.g. 'held objects', "
                      "'tof / head'); with --suite all, each suite must have such rows");

@@ -200,7 +200,9 @@ struct CloudPipeline::Impl {
   //    when there is none.
   bool findCoarseRegions(Search& s);
   // The hint's volume in place of region 1 when region 1 (its limb's free end, if it is a
-  // limb) does not reach the hint (one hand); true when it replaced it.
+  // limb) does not reach the hint (one hand); true when region 1 was grown again (from the
+  // hint's sample, or from its own seed when there is no volume there), so its limb end is
+  // to be found again.
   bool keepToTheTrackedHand(Search& s);
   // 2. The filter box around the coarse volumes and the working resolution.
   void chooseBoxAndStride(Search& s) const;
@@ -566,10 +568,6 @@ bool CloudPipeline::Impl::keepToTheTrackedHand(Search& s) {
     s.first = coarseGrower.grow(s.firstSeed, seg.step, coarseRadius, seg.minAreaM2);
     coarseGrower.accept(cloud::kRegion1);
   }
-  s.minI = s.first.minI;
-  s.maxI = s.first.maxI;
-  s.minJ = s.first.minJ;
-  s.maxJ = s.first.maxJ;
   return true;
 }
 

@@ -5,7 +5,7 @@ Reproducible from seeds: the data comes from `dynahand detector data` (synthetic
 function of (seed, i)); torch is seeded; one run on Debian's python3-torch (CPU).
 
   /usr/bin/python3 train/train_detector.py --dynahand build/release/apps/dynahand \
-      --out models/detector            # the shipped weights (about 50 min on 2 cores)
+      --out models/detector            # the shipped weights (about 85 min on 2 cores)
   /usr/bin/python3 train/train_detector.py --dynahand build/release/apps/dynahand \
       --out /tmp/f --init models/detector/detector.onnx --epochs 7 --lr 4e-4   # fine-tuning
   /usr/bin/python3 train/train_detector.py --dynahand ... --out /tmp/d --quick   # a few steps
@@ -259,9 +259,9 @@ def main():
                         "(default: the python/ folder of --dynahand's build tree, else import)")
     p.add_argument("--out", required=True, help="output folder for detector.onnx and detector.json")
     p.add_argument("--work", default=None, help="data cache folder (default: OUT/../work or /tmp)")
-    p.add_argument("--train-count", type=int, default=100000)
+    p.add_argument("--train-count", type=int, default=300000)
     p.add_argument("--heldback-count", type=int, default=3000)
-    p.add_argument("--epochs", type=float, default=28.0)
+    p.add_argument("--epochs", type=float, default=10.0)
     p.add_argument("--batch", type=int, default=128)
     p.add_argument("--lr", type=float, default=2e-3)
     p.add_argument("--seed", type=int, default=1)

@@ -49,8 +49,10 @@ struct DetectorSettings {
   /// ONNX weights; empty: detect::defaultDetectorFile() (the shipped ones), and without any
   /// the tracker runs without a detector. A file given here that does not load is an error.
   std::string weights;
-  /// Keypoints below this confidence ([0, 1]) are not used by the strategies.
-  float minConfidence = 0.3f;
+  /// Keypoints below this confidence ([0, 1]) are not used by the strategies. Kept low: a
+  /// finger left without targets is fitted from nothing, farther off than the detector's
+  /// unsure guess (docs/tracker.md, "Learned detector").
+  float minConfidence = 0.1f;
   /// The detector-fit and feature simulations and acquisition use the detection when its mean
   /// confidence reaches this (the error metric still decides between the simulations).
   float minMeanConfidence = 0.25f;

@@ -479,17 +479,20 @@ void HandTracker::prepareFrameStart(const HandFrame& frame) {
 
 StrategyContext HandTracker::laneContext(Lane& lane, const HandFrame& frame,
                                          const FrameStart& start) const {
-  return StrategyContext{lane.rig,
-                         lane.simulator,
-                         start.laneInput,
-                         settings_.substeps,
-                         frame.time,
-                         settings_.flipPeriodS,
-                         frame.detection,
-                         &startAngles_,
-                         start.bindLabels ? std::span<const LabelledPoint>(detectorLabels_)
-                                          : std::span<const LabelledPoint>(),
-                         start.fittedStart};
+  return StrategyContext{
+      lane.rig,
+      lane.simulator,
+      start.laneInput,
+      settings_.substeps,
+      frame.time,
+      settings_.flipPeriodS,
+      frame.detection,
+      &startAngles_,
+      start.bindLabels ? std::span<const LabelledPoint>(detectorLabels_)
+                       : std::span<const LabelledPoint>(),
+      start.fittedStart,
+      keypoints_ != nullptr &&
+          settings_.strategies[static_cast<std::size_t>(StrategyKind::DetectorFit)]};
 }
 
 void HandTracker::startLane(Lane& lane) {

@@ -30,7 +30,7 @@ class FingerFlipStrategy final : public Strategy {
   int steps(int substeps) const override { return 2 * substeps; }
 
   bool begin(StrategyContext& c) override {
-    if (c.startAngles == nullptr) return false;
+    if (c.startAngles == nullptr || c.detectorInUse) return false;
     const auto& model = c.rig.model();
     const auto& anatomy = c.rig.anatomy();
     auto& world = c.rig.world();

@@ -31,10 +31,11 @@ struct StrategyContext {
   // keypoints as labelled points on the bodies they name, and the model fitted to them.
   std::span<const LabelledPoint> detectorLabels;
   const model::ModelPose* detectorPose = nullptr;
-  // The learned detector's keypoints are confident and on the data this frame (whether or
-  // not the frame starts near them), and the detector-fit simulation runs on them. Finger
-  // flip stands down then: the detector's fit is the data's own answer to a wrongly bent
-  // finger, where the flip only guesses.
+  // The learned detector's keypoints are confident and on the data this frame, and the
+  // detector-fit simulation is switched on (it runs when the frame starts farther than
+  // DetectorSettings::engageDistanceM from them; nearer, the start already agrees with them).
+  // Finger flip stands down then: the detector's fit is the data's own answer to a wrongly
+  // bent finger, where the flip only guesses.
   bool detectorInUse = false;
 };
 

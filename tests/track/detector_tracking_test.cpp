@@ -190,10 +190,9 @@ FlipRuns fingerFlipRuns(const TrackerSettings& settings) {
   return runs;
 }
 
-// The detector fit replaces finger flip: on the motion suite's tof rows the tracker is as
-// accurate without the flips while the detector is in use (docs/tracker.md, "Simulations"),
-// and a frame takes about 0.4 ms less. Without the detector, or without its fit, the flips
-// run on every frame as in the paper.
+// The detector fit replaces finger flip while the detector's keypoints are in use
+// (docs/tracker.md, "Simulations"). Without the detector, or without its fit, the flips run on
+// every frame as in the paper.
 TEST(DetectorTracking, FingerFlipStandsDownWhileTheDetectorFitRuns) {
   const FlipRuns withDetector = fingerFlipRuns(TrackerSettings{});
   EXPECT_EQ(withDetector.detected, withDetector.frames) << "the detector sees the open hand";
@@ -331,8 +330,8 @@ TEST(DetectorTracking, AgreementWithTheDetectorChoosesAmongTheSimulations) {
 // A cylinder held across the palm, seen from the desk (grasp-cylinder at 2.5x speed): its
 // samples, up to half of the hand's segment, pull the palm and fingers onto it unless the points
 // far from the detected skeleton are left out (DetectorSettings::objectDistanceM): every point
-// 29.4 / 16.8 mm (cylinder / box), without the object's 17.6 / 16.2 mm. The box lies flatter
-// against the palm and pulls less; each object gains, the two by 6 mm on average.
+// 29.4 / 16.8 mm (cylinder / box), without the object's 17.6 / 16.2 mm. The box's points pull
+// less; each object gains, the two by 6 mm on average.
 TEST(DetectorTracking, AHeldObjectsPointsAreLeftOut) {
   double gained = 0.0;
   for (const auto object : {synth::HeldObject::Cylinder, synth::HeldObject::Box}) {

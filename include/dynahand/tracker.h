@@ -74,6 +74,9 @@ struct DetectorSettings {
   /// disagreeFrames frames in a row, the detector-fit simulation's hand replaces the winner.
   float disagreeDistanceM = 0.035f;
   int disagreeFrames = 4;  ///< frames in a row beyond disagreeDistanceM (see above)
+  /// ... unless its error is more than this times the winner's (dimensionless; 0: always
+  /// replaced): a hand that fits the data that much worse says the detection is what is wrong.
+  float replaceMaxErrorRatio = 2.0f;
   /// The winner of a frame's simulations is the one with the least error plus this times the
   /// mean distance (m) of its keypoints from the detector's confident ones (dimensionless;
   /// 0: the paper's error metric alone). Joints hidden from the camera (fingers curled behind

@@ -114,8 +114,13 @@ namespace {
 // about this far in front of the palm, and fingers pointing at the camera this far in
 // front of each other.
 constexpr float kMaxOccluderStepM = 0.06f;
-// Where a surface across a depth step lies relative to the region cell beside it.
-enum AcrossSide : std::uint8_t { kInFront = 0, kBehind = 1, kFarBehind = 2 };
+// Largest depth step (m) to a finger seen past the hand that hides the rest of it: a finger
+// pointing away from the camera (the index of a fist seen from behind by a head-mounted
+// camera) shows its tip up to about its length behind the knuckles in front of it.
+constexpr float kMaxHiddenFingerStepM = 0.12f;
+// Where a surface across a depth step lies relative to the region cell beside it: in front,
+// behind within kMaxOccluderStepM, behind within kMaxHiddenFingerStepM, or farther.
+enum AcrossSide : std::uint8_t { kInFront = 0, kBehind = 1, kFingerBehind = 2, kFarBehind = 3 };
 }  // namespace
 
 // grow's running state: the settings of this call, the region's sums, the queue's ends and
@@ -298,9 +303,10 @@ void RegionGrower::floodSurface(Growth& g) {
           const Vec3 q(columnX[ni] * zn, rowY[nj] * zn, zn);
           if ((q - nearest).squaredNorm() <= radius2) {
             acrossQueued[n] = stamp;
-            acrossSide[acrossTail] = zn < z                        ? kInFront
-                                     : zn - z <= kMaxOccluderStepM ? kBehind
-                                                                   : kFarBehind;
+            acrossSide[acrossTail] = zn < z                            ? kInFront
+                                     : zn - z <= kMaxOccluderStepM     ? kBehind
+                                     : zn - z <= kMaxHiddenFingerStepM ? kFingerBehind
+                                                                       : kFarBehind;
             across[acrossTail++] = (nj << 16) | ni;
           }
         }
@@ -370,8 +376,9 @@ std::int32_t RegionGrower::nextSurfaceAcross(Growth& g) {
   // than minAreaM2) beside it at any step, e.g. fingers pointing at the camera, each a few
   // cm in front of the next. Once large enough it takes fragments in front of it (more
   // fingers) and surfaces behind it within kMaxOccluderStepM (the palm behind curled
-  // fingers) unless larger than a hand and forearm can be inside the ball (a wall, a
-  // table, the torso).
+  // fingers) or kMaxHiddenFingerStepM (a finger pointing away, its tip seen past the
+  // knuckles that hide the rest of it) unless larger than a hand and forearm can be inside
+  // the ball (a wall, a table, the torso).
   const bool small = g.sums.areaZ2 < g.minAreaZ2;
   while (g.acrossHead < g.acrossTail) {
     const auto index = static_cast<std::size_t>(g.acrossHead++);

@@ -274,6 +274,8 @@ const HandTracker::Lane* HandTracker::checkAgainstDetector(const HandFrame& fram
              replacement.error);
     replacement.candidate.error = replacement.error.total;
     disagreeFrames_ = 0;
+    const float ratio = settings_.detector.replaceMaxErrorRatio;
+    if (ratio > 0.0f && replacement.error.total > ratio * best->error.total) return best;
     return &replacement;
   }
   return best;

@@ -127,8 +127,9 @@ class HandTracker {
   std::span<const Vec3> pointsOnTheDetectedHand(std::span<const Vec3> points);
   std::vector<Vec3> handPoints_;  // pointsOnTheDetectedHand's result
   // Loss test after the winner is chosen: counts frames in a row the winner disagrees with
-  // the detector; at DetectorSettings::disagreeFrames the detector-fit lane replaces it.
-  // Returns the lane to keep.
+  // the detector; at DetectorSettings::disagreeFrames the detector-fit lane replaces it unless
+  // it fits more than DetectorSettings::replaceMaxErrorRatio times worse. Returns the lane to
+  // keep.
   const Lane* checkAgainstDetector(const HandFrame& frame, const Lane* best);
   // Median over `keypoints` of how far (m) each lies from the surface `points` sample, seen
   // from the camera: its distance from the nearest point's line of sight plus how far it lies

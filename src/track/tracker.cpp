@@ -122,6 +122,8 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
   if (!(s.detector.maxOffCloudM > 0.0f)) return Error{"detector maxOffCloudM must be > 0 m"};
   if (!(s.detector.disagreeDistanceM > 0.0f) || s.detector.disagreeFrames < 1)
     return Error{"detector disagreeDistanceM must be > 0 m and disagreeFrames >= 1"};
+  if (!(s.detector.replaceMaxErrorRatio >= 0.0f) || std::isinf(s.detector.replaceMaxErrorRatio))
+    return Error{"detector replaceMaxErrorRatio must be >= 0 and finite (0: always replace)"};
   if (!(s.detector.limbEndRadius >= 0.0f) || !(s.detector.limbEndCropDistanceM > 0.0f))
     return Error{"detector limbEndRadius must be >= 0 and limbEndCropDistanceM > 0 m"};
   if (!keypointDetector) s.detector.enabled = false;

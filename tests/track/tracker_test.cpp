@@ -238,6 +238,9 @@ TEST(Tracker, RejectsBadSettings) {
     badAcquisitionPull.acquisitionPullForce = pull;
     EXPECT_FALSE(
         Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badAcquisitionPull).ok());
+    TrackerSettings badRatio;
+    badRatio.detector.replaceMaxErrorRatio = pull;  // no error is a NaN or infinite ratio of one
+    EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badRatio).ok());
   }
 }
 

@@ -26,7 +26,9 @@ constexpr int kCandidateRounds = 3;
 // forearm leave toward the body and the hand end free.
 constexpr float kLimbRadiusFactor = 2.0f;
 // A ball moved toward a limb's free end stops with the end this far (in hand radii) from
-// its centre.
+// its centre. It moves whenever the end lies farther than that from the nearest sample: an
+// end near the ball's edge leaves out the fingers beside it that reach farther (a thumb or
+// index tip a few cm beyond the middle finger's).
 constexpr float kEndInsideBall = 0.75f;
 // The limb is explored again from its free end at most this many times, while the end moves
 // more than kLimbEndMoveFactor hand radii.
@@ -694,10 +696,11 @@ void CloudPipeline::Impl::growFineRegions(Search& s, const DepthGrid& fine) {
       if (seed < 0) break;
       GrownRegion g = fineGrower.grow(seed, seg.step, seg.handRadiusM, seg.minAreaM2);
       const Vec3 toNearest = g.nearestPoint - s.handEnd[r];
-      if (s.haveHandEnd[r] && toNearest.norm() > seg.handRadiusM) {
-        // The ball around the nearest sample leaves out the limb's free end: that sample is
-        // on a forearm pointing at the camera. The ball moves toward the free end until it
-        // holds it with a quarter radius to spare.
+      if (s.haveHandEnd[r] && toNearest.norm() > kEndInsideBall * seg.handRadiusM) {
+        // The ball around the nearest sample leaves out the limb's free end, or holds it
+        // with less than a quarter radius to spare: that sample is on a forearm pointing at
+        // the camera. The ball moves toward the free end until it holds it with a quarter
+        // radius to spare.
         const Vec3 centre =
             s.handEnd[r] + toNearest.normalized() * (kEndInsideBall * seg.handRadiusM);
         const int endSeed = fineGrower.closestFreeCell(centre);

@@ -483,5 +483,53 @@ TEST(CloudSynthClips, AThumbPointingAwayIsSegmentedPastTheHandThatHidesIt) {
   EXPECT_GE(segmented, visible * 8 / 10);
 }
 
+// animbank.pose frames 2224-2260 seen from a head-mounted camera, on a hand shaped unlike the
+// model: the forearm points at the camera and the limb's free end lies
+// 16-18 cm from the nearest sample, just inside the hand-sized ball around it, while the thumb
+// and the index finger reach 19-21 cm. The ball moves toward the free end whenever it holds the
+// end with less than a quarter radius to spare (kEndInsideBall, src/cloud/cloud_pipeline.cpp),
+// so every joint the camera sees is in the segment.
+TEST(CloudSynthClips, FingersReachingPastTheLimbsFreeEndAreSegmented) {
+  DYNAHAND_REQUIRE_SHARED_DATA(data);
+  synth::SynthOptions options = test::animbankOptions(data, 0, 2336, "tof");
+  options.scene.placement = synth::CameraPlacement::HeadMounted;
+  options.proportions = synth::randomProportions(3, 0.15f);
+  Result<synth::SyntheticSequence> seq = synth::SyntheticSequence::create(options);
+  ASSERT_TRUE(seq.ok()) << seq.error().message;
+  const Intrinsics& k = seq->intrinsics();
+  CloudPipeline pipeline(k);
+  CloudFrame out;
+  int visible = 0;
+  int leftOut = 0;
+  for (int f = 2224; f <= 2260; f += 4) {
+    const synth::SyntheticFrame& frame = seq->frame(f);
+    const auto& truth = frame.hands[0].keypoints;
+    Vec3 palm = Vec3::Zero();
+    for (const int j : {0, 5, 9, 13, 17}) palm += truth[static_cast<std::size_t>(j)];
+    const HandHint hint{palm / 5.0f};
+    ASSERT_TRUE(pipeline.process(frame.depth, out, &hint).ok());
+    for (std::size_t j = 0; j < truth.size(); ++j) {
+      const Vec3& p = truth[j];
+      const int u = static_cast<int>(std::lround(k.fx * p.x() / p.z() + k.cx));
+      const int v = static_cast<int>(std::lround(k.fy * p.y() / p.z() + k.cy));
+      if (!(u >= 1 && v >= 1 && u + 1 < k.width && v + 1 < k.height)) continue;
+      // Seen: the depth there is the joint's (not a surface in front of it).
+      if (!(std::fabs(out.depthAt(u, v) - p.z()) < 0.02f)) continue;
+      ++visible;
+      int masked = 0;
+      for (int dv = -1; dv <= 1; ++dv)
+        for (int du = -1; du <= 1; ++du)
+          masked += out.mask[static_cast<std::size_t>((v + dv) * k.width + u + du)];
+      if (masked == 0) {
+        ++leftOut;
+        std::printf("frame %d: joint %zu seen but not segmented\n", f, j);
+      }
+    }
+  }
+  std::printf("%d joints seen over 10 frames, %d of them not segmented\n", visible, leftOut);
+  ASSERT_GE(visible, 50);
+  EXPECT_EQ(leftOut, 0);
+}
+
 }  // namespace
 }  // namespace dynahand

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -437,6 +439,47 @@ TEST(CloudSynthClips, AnElbowNearerThanTheTrackedFistIsNotTakenForTheHand) {
   EXPECT_GE(elbowTaken, options.frameCount / 2);
 }
 
+// animbank.pose (played whole: the head-mounted camera is placed for the motion played) from a
+// head-mounted camera, on a hand shaped unlike the model; frames first..last every step through
+// the pipeline, hinted with the true palm centre (where a tracker has it), each handed to visit.
+void forEachHeadMountedAnimbankFrame(
+    const std::filesystem::path& data, int first, int last, int step,
+    const std::function<void(int, const synth::SyntheticFrame&, const CloudFrame&,
+                             const Intrinsics&)>& visit) {
+  synth::SynthOptions options = test::animbankOptions(data, 0, 2336, "tof");
+  options.scene.placement = synth::CameraPlacement::HeadMounted;
+  options.proportions = synth::randomProportions(3, 0.15f);
+  Result<synth::SyntheticSequence> seq = synth::SyntheticSequence::create(options);
+  ASSERT_TRUE(seq.ok()) << seq.error().message;
+  CloudPipeline pipeline(seq->intrinsics());
+  CloudFrame out;
+  for (int f = first; f <= last; f += step) {
+    const synth::SyntheticFrame& frame = seq->frame(f);
+    Vec3 palm = Vec3::Zero();
+    for (const int j : {0, 5, 9, 13, 17})
+      palm += frame.hands[0].keypoints[static_cast<std::size_t>(j)];
+    const HandHint hint{palm / 5.0f};
+    ASSERT_TRUE(pipeline.process(frame.depth, out, &hint).ok());
+    visit(f, frame, out, seq->intrinsics());
+  }
+}
+
+enum class JointView { Hidden, Segmented, LeftOut };
+
+// Whether the camera sees joint p (the depth at its pixel is the joint's, not a surface in front
+// of it) and, if so, whether the segment holds its pixel or a neighbour.
+JointView jointView(const CloudFrame& out, const Intrinsics& k, const Vec3& p) {
+  const int u = static_cast<int>(std::lround(k.fx * p.x() / p.z() + k.cx));
+  const int v = static_cast<int>(std::lround(k.fy * p.y() / p.z() + k.cy));
+  if (!(u >= 1 && v >= 1 && u + 1 < k.width && v + 1 < k.height)) return JointView::Hidden;
+  if (!(std::fabs(out.depthAt(u, v) - p.z()) < 0.02f)) return JointView::Hidden;
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int du = -1; du <= 1; ++du)
+      if (out.mask[static_cast<std::size_t>((v + dv) * k.width + u + du)] != 0)
+        return JointView::Segmented;
+  return JointView::LeftOut;
+}
+
 // animbank.pose frames 840-881 seen from a head-mounted camera, on a hand shaped unlike the
 // model: the thumb points away from the camera, the hand in front of it hides most of it, and
 // its tip shows past the hand, more than 6 cm deeper than the hand's surface beside it. The
@@ -445,38 +488,17 @@ TEST(CloudSynthClips, AnElbowNearerThanTheTrackedFistIsNotTakenForTheHand) {
 // constraints would see it.
 TEST(CloudSynthClips, AThumbPointingAwayIsSegmentedPastTheHandThatHidesIt) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
-  // The whole file: the head-mounted camera is placed for the motion played.
-  synth::SynthOptions options = test::animbankOptions(data, 0, 2336, "tof");
-  options.scene.placement = synth::CameraPlacement::HeadMounted;
-  options.proportions = synth::randomProportions(3, 0.15f);
-  Result<synth::SyntheticSequence> seq = synth::SyntheticSequence::create(options);
-  ASSERT_TRUE(seq.ok()) << seq.error().message;
-  const Intrinsics& k = seq->intrinsics();
-  CloudPipeline pipeline(k);
-  CloudFrame out;
   int visible = 0;
   int segmented = 0;
   constexpr int kFirst = 840, kCount = 42;
-  for (int f = kFirst; f < kFirst + kCount; f += 3) {
-    const synth::SyntheticFrame& frame = seq->frame(f);
-    const auto& truth = frame.hands[0].keypoints;
-    Vec3 palm = Vec3::Zero();
-    for (const int j : {0, 5, 9, 13, 17}) palm += truth[static_cast<std::size_t>(j)];
-    const HandHint hint{palm / 5.0f};
-    ASSERT_TRUE(pipeline.process(frame.depth, out, &hint).ok());
-    const Vec3& tip = truth[4];  // the thumb's tip
-    const int u = static_cast<int>(std::lround(k.fx * tip.x() / tip.z() + k.cx));
-    const int v = static_cast<int>(std::lround(k.fy * tip.y() / tip.z() + k.cy));
-    ASSERT_TRUE(u >= 1 && v >= 1 && u + 1 < k.width && v + 1 < k.height);
-    // Seen: the depth there is the tip's (not the knuckles in front of it).
-    if (!(std::fabs(out.depthAt(u, v) - tip.z()) < 0.02f)) continue;
-    ++visible;
-    int masked = 0;
-    for (int dv = -1; dv <= 1; ++dv)
-      for (int du = -1; du <= 1; ++du)
-        masked += out.mask[static_cast<std::size_t>((v + dv) * k.width + u + du)];
-    segmented += masked > 0;
-  }
+  forEachHeadMountedAnimbankFrame(
+      data, kFirst, kFirst + kCount - 1, 3,
+      [&](int, const synth::SyntheticFrame& frame, const CloudFrame& out, const Intrinsics& k) {
+        const JointView tip = jointView(out, k, frame.hands[0].keypoints[4]);  // the thumb's
+        visible += tip != JointView::Hidden;
+        segmented += tip == JointView::Segmented;
+      });
+  if (HasFatalFailure()) return;
   std::printf("thumb tip seen on %d of %d frames, segmented on %d of those\n", visible,
               (kCount + 2) / 3, segmented);
   ASSERT_GE(visible, 10);
@@ -484,48 +506,28 @@ TEST(CloudSynthClips, AThumbPointingAwayIsSegmentedPastTheHandThatHidesIt) {
 }
 
 // animbank.pose frames 2224-2260 seen from a head-mounted camera, on a hand shaped unlike the
-// model: the forearm points at the camera and the limb's free end lies
-// 16-18 cm from the nearest sample, just inside the hand-sized ball around it, while the thumb
-// and the index finger reach 19-21 cm. The ball moves toward the free end whenever it holds the
-// end with less than a quarter radius to spare (kEndInsideBall, src/cloud/cloud_pipeline.cpp),
-// so every joint the camera sees is in the segment.
+// model: the forearm points at the camera and the limb's free end lies 16-18 cm from the
+// nearest sample, just inside the hand-sized ball around it, while the thumb and the index
+// finger reach 19-21 cm. The ball moves toward the free end whenever it holds the end with less
+// than a quarter radius to spare (kEndInsideBall, src/cloud/cloud_pipeline.cpp), so every joint
+// the camera sees is in the segment.
 TEST(CloudSynthClips, FingersReachingPastTheLimbsFreeEndAreSegmented) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
-  synth::SynthOptions options = test::animbankOptions(data, 0, 2336, "tof");
-  options.scene.placement = synth::CameraPlacement::HeadMounted;
-  options.proportions = synth::randomProportions(3, 0.15f);
-  Result<synth::SyntheticSequence> seq = synth::SyntheticSequence::create(options);
-  ASSERT_TRUE(seq.ok()) << seq.error().message;
-  const Intrinsics& k = seq->intrinsics();
-  CloudPipeline pipeline(k);
-  CloudFrame out;
   int visible = 0;
   int leftOut = 0;
-  for (int f = 2224; f <= 2260; f += 4) {
-    const synth::SyntheticFrame& frame = seq->frame(f);
-    const auto& truth = frame.hands[0].keypoints;
-    Vec3 palm = Vec3::Zero();
-    for (const int j : {0, 5, 9, 13, 17}) palm += truth[static_cast<std::size_t>(j)];
-    const HandHint hint{palm / 5.0f};
-    ASSERT_TRUE(pipeline.process(frame.depth, out, &hint).ok());
-    for (std::size_t j = 0; j < truth.size(); ++j) {
-      const Vec3& p = truth[j];
-      const int u = static_cast<int>(std::lround(k.fx * p.x() / p.z() + k.cx));
-      const int v = static_cast<int>(std::lround(k.fy * p.y() / p.z() + k.cy));
-      if (!(u >= 1 && v >= 1 && u + 1 < k.width && v + 1 < k.height)) continue;
-      // Seen: the depth there is the joint's (not a surface in front of it).
-      if (!(std::fabs(out.depthAt(u, v) - p.z()) < 0.02f)) continue;
-      ++visible;
-      int masked = 0;
-      for (int dv = -1; dv <= 1; ++dv)
-        for (int du = -1; du <= 1; ++du)
-          masked += out.mask[static_cast<std::size_t>((v + dv) * k.width + u + du)];
-      if (masked == 0) {
-        ++leftOut;
-        std::printf("frame %d: joint %zu seen but not segmented\n", f, j);
-      }
-    }
-  }
+  forEachHeadMountedAnimbankFrame(
+      data, 2224, 2260, 4,
+      [&](int f, const synth::SyntheticFrame& frame, const CloudFrame& out, const Intrinsics& k) {
+        for (std::size_t j = 0; j < frame.hands[0].keypoints.size(); ++j) {
+          const JointView view = jointView(out, k, frame.hands[0].keypoints[j]);
+          visible += view != JointView::Hidden;
+          if (view == JointView::LeftOut) {
+            ++leftOut;
+            std::printf("frame %d: joint %zu seen but not segmented\n", f, j);
+          }
+        }
+      });
+  if (HasFatalFailure()) return;
   std::printf("%d joints seen over 10 frames, %d of them not segmented\n", visible, leftOut);
   ASSERT_GE(visible, 50);
   EXPECT_EQ(leftOut, 0);

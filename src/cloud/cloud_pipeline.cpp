@@ -28,7 +28,7 @@ constexpr float kLimbRadiusFactor = 2.0f;
 // A ball moved toward a limb's free end stops with the end this far (in hand radii) from
 // its centre. It moves whenever the end lies farther than that from the nearest sample: an
 // end near the ball's edge leaves out the fingers beside it that reach farther (a thumb or
-// index tip a few cm beyond the middle finger's).
+// index tip a few cm beyond the end found).
 constexpr float kEndInsideBall = 0.75f;
 // The limb is explored again from its free end at most this many times, while the end moves
 // more than kLimbEndMoveFactor hand radii.

@@ -469,8 +469,9 @@ enum class JointView { Hidden, Segmented, LeftOut };
 // Whether the camera sees joint p (the depth at its pixel is the joint's, not a surface in front
 // of it) and, if so, whether the segment holds its pixel or a neighbour.
 JointView jointView(const CloudFrame& out, const Intrinsics& k, const Vec3& p) {
-  const int u = static_cast<int>(std::lround(k.fx * p.x() / p.z() + k.cx));
-  const int v = static_cast<int>(std::lround(k.fy * p.y() / p.z() + k.cy));
+  const Vec2 uv = k.project(p);
+  const int u = static_cast<int>(std::lround(uv.x()));
+  const int v = static_cast<int>(std::lround(uv.y()));
   if (!(u >= 1 && v >= 1 && u + 1 < k.width && v + 1 < k.height)) return JointView::Hidden;
   if (!(std::fabs(out.depthAt(u, v) - p.z()) < 0.02f)) return JointView::Hidden;
   for (int dv = -1; dv <= 1; ++dv)

@@ -28,7 +28,8 @@ namespace {
 struct HandOut {
   std::string side;
   bool tracked = false;
-  F32Array keypoints21, openxr26, bodies, bodyError, detectorKeypoints21, detectorConfidence;
+  F32Array keypoints21, skeletonKeypoints21, openxr26, bodies, bodyError, detectorKeypoints21,
+      detectorConfidence;
   float error = 0, fitError = 0, occlusionError = 0, detectorDisagreement = 0;
   float dataNearModel = 0, modelOnHand = 0;
   int fingertipsOffHand = 0, disagreeingFrames = 0, points = 0;
@@ -41,6 +42,7 @@ HandOut handOut(const track::HandResult& h) {
   o.side = h.side == model::Side::Right ? "right" : "left";
   o.tracked = h.tracked;
   o.keypoints21 = keypointsArray(h.keypoints21, h.tracked);
+  o.skeletonKeypoints21 = keypointsArray(h.skeletonKeypoints21, h.tracked);
   o.openxr26 = F32Array({26, 8});
   {
     auto m = o.openxr26.mutable_unchecked<2>();
@@ -436,7 +438,10 @@ void bindTracker(py::module_& m) {
       .def_readonly("tracked", &HandOut::tracked, "Whether the hand is tracked this frame.")
       .def_readonly("keypoints21", &HandOut::keypoints21,
                     "(21, 3) keypoints, m, camera frame, MediaPipe order (0 wrist, 1-4 thumb, "
-                    "5-8 index, 9-12 middle, 13-16 ring, 17-20 pinky).")
+                    "5-8 index, 9-12 middle, 13-16 ring, 17-20 pinky): the pose's moved toward "
+                    "the detector's (DetectorSettings.reportBlend).")
+      .def_readonly("skeleton_keypoints21", &HandOut::skeletonKeypoints21,
+                    "(21, 3) the pose's own keypoints, m, MediaPipe order.")
       .def_readonly("openxr26", &HandOut::openxr26,
                     "(26, 8) OpenXR hand joints (XrHandJointEXT order): x, y, z (m), qw, qx, qy, "
                     "qz, radius (m).")

@@ -51,7 +51,10 @@ class HandResult:
     def tracked(self) -> bool: ...
     @property
     def keypoints21(self) -> _F32:
-        """(21, 3) keypoints, MediaPipe order."""
+        """(21, 3) keypoints, MediaPipe order: the pose's moved toward the detector's."""
+    @property
+    def skeleton_keypoints21(self) -> _F32:
+        """(21, 3) the pose's own keypoints, MediaPipe order."""
     @property
     def openxr26(self) -> _F32:
         """(26, 8): x, y, z, qw, qx, qy, qz, radius per OpenXR joint."""

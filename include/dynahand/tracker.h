@@ -87,6 +87,17 @@ struct DetectorSettings {
   /// and the forearm beyond the wrist) pull no bone and are not scored by the error metric:
   /// an object held in the hand. 0: every point is the hand's.
   float objectDistanceM = 0.03f;
+  /// The reported keypoints (HandResult::keypoints21) are the tracked skeleton's moved toward
+  /// the detector's confident ones by this times each one's confidence (dimensionless, [0, 1];
+  /// 0: the skeleton's own). The two estimates' errors are partly independent, and the
+  /// detector places the wrist and knuckles better than the rigid model palm of a hand shaped
+  /// otherwise. Only the report: the pose, the OpenXR joints and the next frame's start stay
+  /// the skeleton's.
+  float reportBlend = 0.6f;
+  /// ... scaled down linearly with the keypoint's distance from the skeleton's, to nothing at
+  /// this distance (m): two estimates that far apart are not noise about one joint, and the
+  /// skeleton, which won on the data, is kept (a wrong detection moves no joint).
+  float reportBlendReachM = 0.10f;
   /// One hand whose segment is a limb attached to the body (CloudFrame::segment.limbEndFound):
   /// the crop of a hand not found last frame is centred on the mean of the hand's points
   /// within limbEndRadius x the model hand's length of the limb's free end, not on the
@@ -197,10 +208,13 @@ struct Candidate {
 
 /// One hand's result for a frame.
 struct HandResult {
-  model::Side side = model::Side::Right;           ///< which hand
-  bool tracked = false;                            ///< a pose is reported (the hand is not lost)
-  model::ModelPose pose;                           ///< 17 body poses (valid when tracked)
-  Keypoints21 keypoints21{};                       ///< MediaPipe order, m
+  model::Side side = model::Side::Right;  ///< which hand
+  bool tracked = false;                   ///< a pose is reported (the hand is not lost)
+  model::ModelPose pose;                  ///< 17 body poses (valid when tracked)
+  /// MediaPipe order, m: the pose's keypoints blended with the detector's
+  /// (DetectorSettings::reportBlend); skeletonKeypoints21 are the pose's own.
+  Keypoints21 keypoints21{};
+  Keypoints21 skeletonKeypoints21{};               ///< the pose's keypoints, MediaPipe order, m
   std::array<model::XrJoint, 26> openxr26{};       ///< OpenXR's 26 hand joints (valid when tracked)
   float error = 0.0f;                              ///< errTotal of the winner, m
   float fitError = 0.0f;                           ///< sum errFit, m

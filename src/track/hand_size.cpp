@@ -38,7 +38,7 @@ bool fingersOpen(const HandResult& hand) {
   constexpr float kStraight = 0.9f;
   int straight = 0;
   for (std::size_t mcp : {5u, 9u, 13u, 17u}) {
-    const auto& k = hand.keypoints21;
+    const auto& k = hand.skeletonKeypoints21;
     const float along = (k[mcp + 1] - k[mcp]).norm() + (k[mcp + 2] - k[mcp + 1]).norm() +
                         (k[mcp + 3] - k[mcp + 2]).norm();
     if ((k[mcp + 3] - k[mcp]).norm() >= kStraight * along) ++straight;

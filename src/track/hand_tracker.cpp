@@ -413,18 +413,31 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     out.detectorKeypoints21 = hand.keypoints->points;
     out.detectorConfidence = hand.keypoints->confidence;
   }
-  if (keypoints_ != nullptr) out.detectorDisagreement = detectorDistance(out.keypoints21);
+  if (keypoints_ != nullptr) out.detectorDisagreement = detectorDistance(out.skeletonKeypoints21);
   out.disagreeingFrames = disagreeFrames_;
   if (out.tracked && hand.cloud != nullptr) {
     simulator_.pose(rig_, posed_);
     std::array<Vec3, 5> tips;
-    for (std::size_t f = 0; f < 5; ++f) tips[f] = out.keypoints21[4 + 4 * f];
+    for (std::size_t f = 0; f < 5; ++f) tips[f] = out.skeletonKeypoints21[4 + 4 * f];
     // bestBreakdown_ was measured at exactly these poses: its point distances are this
     // pose's.
     out.quality = measureFitQuality(posed_, bestBreakdown_.pointDistance, *hand.cloud,
                                     rig_.anatomy().forearm, tips);
   } else {
     out.quality = FitQuality{};
+  }
+  if (out.tracked) blendTowardDetector(out.keypoints21);
+}
+
+void HandTracker::blendTowardDetector(Keypoints21& keypoints) const {
+  const float blend = settings_.detector.reportBlend;
+  const float reach = settings_.detector.reportBlendReachM;
+  if (blend <= 0.0f || reach <= 0.0f || keypoints_ == nullptr) return;
+  for (const int i : confidentKeypoints_) {
+    const auto k = static_cast<std::size_t>(i);
+    const Vec3 offset = keypoints_->points[k] - keypoints[k];
+    const float nearness = std::max(0.0f, 1.0f - offset.norm() / reach);
+    keypoints[k] += blend * keypoints_->confidence[k] * nearness * offset;
   }
 }
 
@@ -716,7 +729,8 @@ void HandTracker::fillResult(HandResult& out) {
   out.occlusionError = e.occlusionTotal;
   out.bodyError.resize(e.fit.size());
   for (std::size_t i = 0; i < e.fit.size(); ++i) out.bodyError[i] = e.fit[i] + e.occlusion[i];
-  out.keypoints21 = model::keypoints21(*model_, out.pose);
+  out.skeletonKeypoints21 = model::keypoints21(*model_, out.pose);
+  out.keypoints21 = out.skeletonKeypoints21;
   if (model_->hasOpenXrJoints()) out.openxr26 = model::openxr26(*model_, out.pose);
 }
 

@@ -96,6 +96,8 @@ class HandTracker {
   bool fitDetectorPose(const model::JointAngles* warmStart = nullptr);
   // Mean distance (m) of `keypoints` from the detector's confident ones.
   float detectorDistance(const Keypoints21& keypoints) const;
+  // The reported keypoints moved toward the detector's (DetectorSettings::reportBlend).
+  void blendTowardDetector(Keypoints21& keypoints) const;
 
   const model::ArticulatedModel* model_;
   model::Side side_;

@@ -300,8 +300,8 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
   m.trackedHandCentre.reset();
   if (handCount == 1 && r.hands.front().tracked) {
     Vec3 sum = Vec3::Zero();
-    for (const Vec3& p : r.hands.front().keypoints21) sum += p;
-    m.trackedHandCentre = sum / static_cast<float>(r.hands.front().keypoints21.size());
+    for (const Vec3& p : r.hands.front().skeletonKeypoints21) sum += p;
+    m.trackedHandCentre = sum / static_cast<float>(r.hands.front().skeletonKeypoints21.size());
   }
   r.timeMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

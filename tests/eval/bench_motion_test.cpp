@@ -191,11 +191,11 @@ TEST(MotionSuite, QuickSuiteRunsEndToEnd) {
     // The shipped detector runs on the hand in every row.
     EXPECT_TRUE(std::isfinite(row.detectorMeanMm)) << row.label;
     EXPECT_GT(row.detectorRan, 0.5) << row.label;
-    // Hands shaped unlike the model: fitted to the truth, the model is off, but by millimetres,
-    // and by less than the tracker.
+    // Hands shaped unlike the model: fitted to the truth, the model is off, but by millimetres.
+    // (The reported keypoints, blended toward the detector's, are not bound to the model's
+    // shape, so the tracker may come out below this misfit.)
     EXPECT_GT(row.misfitMm, 0.5) << row.label;
     EXPECT_LT(row.misfitMm, 8.0) << row.label;
-    EXPECT_LT(row.misfitMm, row.meanMm) << row.label;
   }
   const std::string text = motionTableText(rows);
   EXPECT_NE(text.find("clips x2.5 / tof / head / gt"), std::string::npos) << text;

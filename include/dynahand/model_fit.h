@@ -22,6 +22,9 @@ struct FitOptions {
   int maxIterations = 60;                ///< Levenberg-Marquardt iterations per start
   float meanErrorGoal = 1e-5f;           ///< m; stop once the mean keypoint error is below this
   const JointAngles* initial = nullptr;  ///< start here (and skip the rigid alignment); not owned
+  /// Per target, its weight in the squared-distance cost (finite, >= 0; e.g. a detector's
+  /// confidence); empty: 1 each. The rigid alignment that starts a fit is unweighted.
+  std::span<const float> weights;
 };
 
 /// A fitted pose and how well it fits.
@@ -40,7 +43,8 @@ class KeypointFitter {
   explicit KeypointFitter(const ArticulatedModel& model);
 
   /// keypointIndices index model.keypoints(); targets are world positions (m), same length.
-  /// Fails (with a reason) on mismatched lengths, non-finite targets or fewer than 3 targets.
+  /// Fails (with a reason) on mismatched lengths, non-finite targets or fewer than 3 targets,
+  /// or weights (FitOptions::weights) that are not one finite, non-negative value per target.
   Result<FitResult> fit(std::span<const int> keypointIndices, std::span<const Vec3> targets,
                         const FitOptions& options = {});
   /// The 21 MediaPipe keypoints (the model must have them).
@@ -63,6 +67,7 @@ class KeypointFitter {
   ModelPose pose_;
   std::vector<Vec3> positions_, trialPositions_;
   JointAngles trial_;
+  std::span<const float> weights_;  ///< FitOptions::weights of the fit in progress
 };
 
 /// KeypointFitter(model).fit21(keypoints, options) in one call.

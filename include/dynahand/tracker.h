@@ -56,6 +56,11 @@ struct DetectorSettings {
   /// The detector-fit and feature simulations and acquisition use the detection when its mean
   /// confidence reaches this (the error metric still decides between the simulations).
   float minMeanConfidence = 0.25f;
+  /// The model fitted to the detection (the detector-fit simulation's start) weighs each
+  /// keypoint's squared distance by its confidence to this power (dimensionless; 0: all
+  /// alike). The confidence is calibrated: the shipped weights' keypoints at 0.6-0.7 are off
+  /// by about 10 mm on average, those at 0.2-0.3 by about 40 mm (docs/detector.md).
+  float fitConfidenceExponent = 3.0f;
   /// ... and when the frame-start pose's keypoints are farther than this (m, mean over the
   /// confident keypoints) from the detector's: closer, its noise has nothing to add. Lower
   /// engages the detector-fit simulation on more frames (more accurate, about 0.3-0.45 ms a
@@ -70,7 +75,8 @@ struct DetectorSettings {
   /// wrong surface) would pull the hand away from its data.
   float maxOffCloudM = 0.04f;
   /// Loss test: when the tracked keypoints stay farther than disagreeDistanceM (m, mean over
-  /// the confident keypoints of a detection used as above) from the detector's for
+  /// the confident keypoints of a detection used as above, weighted by their confidence; as
+  /// are engageDistanceM and selectionWeight's distances) from the detector's for
   /// disagreeFrames frames in a row, the detector-fit simulation's hand replaces the winner.
   float disagreeDistanceM = 0.035f;
   int disagreeFrames = 4;  ///< frames in a row beyond disagreeDistanceM (see above)
@@ -93,7 +99,7 @@ struct DetectorSettings {
   /// detector places the wrist and knuckles better than the rigid model palm of a hand shaped
   /// otherwise. Only the report: the pose, the OpenXR joints and the next frame's start stay
   /// the skeleton's.
-  float reportBlend = 0.6f;
+  float reportBlend = 0.8f;
   /// ... scaled down linearly with the keypoint's distance from the skeleton's, to nothing at
   /// this distance (m): two estimates that far apart are not noise about one joint, and the
   /// skeleton, which won on the data, is kept (a wrong detection moves no joint).

@@ -14,6 +14,11 @@
 namespace dynahand::model {
 namespace {
 
+// Target i's weight in the cost (1 without weights).
+float weightOf(std::span<const float> weights, std::size_t i) {
+  return weights.empty() ? 1.0f : weights[i];
+}
+
 Mat3 skew(const Vec3& v) {
   Mat3 m;
   m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
@@ -48,7 +53,7 @@ float KeypointFitter::evaluate(std::span<const int> keypoints, std::span<const V
     const Keypoint& kp = model_->keypoints()[static_cast<size_t>(keypoints[i])];
     const Vec3 unscaled = pose_.bodies[static_cast<size_t>(kp.body)].transform(kp.point);
     positions[i] = angles.root.p + scale * (unscaled - angles.root.p);
-    cost += (positions[i] - targets[i]).squaredNorm();
+    cost += weightOf(weights_, i) * (positions[i] - targets[i]).squaredNorm();
   }
   return cost;
 }
@@ -155,6 +160,11 @@ float KeypointFitter::run(std::span<const int> keypoints, std::span<const Vec3> 
             axes[static_cast<size_t>(k)].cross(p - centres[static_cast<size_t>(k)]).cast<double>();
       }
       if (options.fitScale) jac.block<3, 1>(row, n - 1) = (fromRoot / scale).cast<double>();
+      if (!weights_.empty()) {
+        const double root = std::sqrt(static_cast<double>(weights_[i]));
+        residual.segment<3>(row) *= root;
+        jac.middleRows<3>(row) *= root;
+      }
     }
     normal.noalias() = jac.transpose() * jac;
     gradient.noalias() = jac.transpose() * residual;
@@ -218,11 +228,22 @@ Result<FitResult> KeypointFitter::fit(std::span<const int> keypointIndices,
           fmt::format("fitToKeypoints: keypoint index {} out of range", keypointIndices[i])};
     }
   }
+  if (!options.weights.empty()) {
+    if (options.weights.size() != targets.size())
+      return Error{fmt::format("fitToKeypoints: {} weights for {} targets", options.weights.size(),
+                               targets.size())};
+    for (size_t i = 0; i < options.weights.size(); ++i) {
+      if (!(std::isfinite(options.weights[i]) && options.weights[i] >= 0.0f))
+        return Error{fmt::format("fitToKeypoints: weight {} is negative or not finite", i)};
+    }
+  }
+  weights_ = options.weights;
 
   // Starts: the given pose, or the rigid alignment with straight joints and, if that does
   // not converge, with joints half-way into flexion (curled hands).
   FitResult best;
   best.meanError = std::numeric_limits<float>::infinity();
+  float bestScore = std::numeric_limits<float>::infinity();
   const int starts = options.initial ? 1 : 2;
   for (int start = 0; start < starts; ++start) {
     JointAngles angles = options.initial ? *options.initial : zeroAngles(model);
@@ -245,22 +266,30 @@ Result<FitResult> KeypointFitter::fit(std::span<const int> keypointIndices,
     best.iterations += iterations;
     float sum = 0.0f;
     float worst = 0.0f;
+    float weighted = 0.0f;
+    float weightSum = 0.0f;
     evaluate(keypointIndices, targets, angles, scale, positions_);
     for (size_t i = 0; i < targets.size(); ++i) {
       const float d = (positions_[i] - targets[i]).norm();
       sum += d;
       worst = std::max(worst, d);
+      weighted += weightOf(weights_, i) * d;
+      weightSum += weightOf(weights_, i);
     }
     const float mean = sum / static_cast<float>(targets.size());
     (void)cost;
-    if (mean < best.meanError) {
+    // The starts compared by the weighted mean distance: what the fit minimises.
+    const float score = weightSum > 0.0f ? weighted / weightSum : mean;
+    if (score < bestScore) {
+      bestScore = score;
       best.angles = std::move(angles);
       best.scale = scale;
       best.meanError = mean;
       best.maxError = worst;
     }
-    if (best.meanError < 1e-4f) break;  // 0.1 mm: a second start cannot do meaningfully better
+    if (bestScore < 1e-4f) break;  // 0.1 mm: a second start cannot do meaningfully better
   }
+  weights_ = {};
   return best;
 }
 

@@ -137,12 +137,14 @@ void HandTracker::prepareDetectorEvidence(const HandFrame& frame) {
   if (d == nullptr || !d->valid || d->meanConfidence < s.minMeanConfidence) return;
   fitIndices_.clear();
   fitTargets_.clear();
+  fitWeights_.clear();
   const auto& indices = model_->keypoints21Indices();
   for (std::size_t i = 0; i < indices.size(); ++i) {
     if (d->confidence[i] < s.minConfidence) continue;
     confidentKeypoints_.push_back(static_cast<int>(i));
     fitIndices_.push_back(indices[i]);
     fitTargets_.push_back(d->points[i]);
+    fitWeights_.push_back(std::pow(d->confidence[i], s.fitConfidenceExponent));
     const int body = model_->keypoints()[static_cast<std::size_t>(indices[i])].body;
     detectorLabels_.push_back(
         {d->points[i], BodyMask{1} << body, kDetectorLabelCap * d->confidence[i]});
@@ -187,6 +189,7 @@ bool HandTracker::fitDetectorPose(const model::JointAngles* warmStart) {
   if (!detectorPoseTried_) {
     detectorPoseTried_ = true;
     model::FitOptions options;
+    options.weights = fitWeights_;
     if (warmStart != nullptr) {
       options.initial = warmStart;
       options.maxIterations = kWarmFitIterations;
@@ -244,12 +247,16 @@ float HandTracker::agreementTerm(const Lane& lane) {
 
 float HandTracker::detectorDistance(const Keypoints21& keypoints) const {
   if (keypoints_ == nullptr || confidentKeypoints_.empty()) return 0.0f;
+  // Weighted by confidence: the detector's error grows steeply as its confidence falls.
   float sum = 0.0f;
-  for (const int i : confidentKeypoints_)
-    sum +=
-        (keypoints[static_cast<std::size_t>(i)] - keypoints_->points[static_cast<std::size_t>(i)])
-            .norm();
-  return sum / static_cast<float>(confidentKeypoints_.size());
+  float weights = 0.0f;
+  for (const int i : confidentKeypoints_) {
+    const auto k = static_cast<std::size_t>(i);
+    const float weight = keypoints_->confidence[k];
+    sum += weight * (keypoints[k] - keypoints_->points[k]).norm();
+    weights += weight;
+  }
+  return weights > 0.0f ? sum / weights : 0.0f;
 }
 
 const HandTracker::Lane* HandTracker::checkAgainstDetector(const HandFrame& frame,
@@ -437,7 +444,7 @@ void HandTracker::blendTowardDetector(Keypoints21& keypoints) const {
     const auto k = static_cast<std::size_t>(i);
     const Vec3 offset = keypoints_->points[k] - keypoints[k];
     const float nearness = std::max(0.0f, 1.0f - offset.norm() / reach);
-    keypoints[k] += blend * keypoints_->confidence[k] * nearness * offset;
+    keypoints[k] += std::min(1.0f, blend * keypoints_->confidence[k]) * nearness * offset;
   }
 }
 

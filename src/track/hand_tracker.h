@@ -174,6 +174,7 @@ class HandTracker {
   model::KeypointFitter fitter_;
   std::vector<int> fitIndices_;
   std::vector<Vec3> fitTargets_;
+  std::vector<float> fitWeights_;  // per target, the fit's weight (detector confidence)
   std::vector<LabelledPoint> detectorLabels_;
   model::ModelPose detectorPose_;
   bool haveDetectorPose_ = false;

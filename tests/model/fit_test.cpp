@@ -89,6 +89,56 @@ TEST(Fit, StartsFromAGivenPose) {
   EXPECT_LT(fit->meanError, 0.001f);
 }
 
+// A target far off, weighted low, leaves the others where they belong; weighted alike, it drags
+// the finger (and the hand) toward it.
+TEST(Fit, WeightsDiscountAnUnsureTarget) {
+  std::mt19937 rng(11);
+  const JointAngles truth = fixtures::randomValidAngles(hand(), rng);
+  const auto clean = keypoints21(hand(), forwardKinematics(hand(), truth));
+  constexpr std::size_t kOff = 8;  // the index tip, 4 cm off
+  auto targets = clean;
+  targets[kOff] += Vec3(0.04f, 0.0f, 0.0f);
+  std::array<float, 21> weights;
+  weights.fill(1.0f);
+  weights[kOff] = 1e-4f;
+  // Mean distance of the other 20 fitted keypoints from their true places.
+  const auto othersError = [&](const FitOptions& options) {
+    const Result<FitResult> fit = fitToKeypoints(hand(), targets, options);
+    EXPECT_TRUE(fit.ok()) << fit.message();
+    if (!fit) return 1.0f;
+    const auto fitted = keypoints21(hand(), forwardKinematics(hand(), fit->angles));
+    float sum = 0.0f;
+    for (std::size_t i = 0; i < 21; ++i)
+      if (i != kOff) sum += (fitted[i] - clean[i]).norm();
+    return sum / 20.0f;
+  };
+  FitOptions weighted;
+  weighted.weights = weights;
+  const float alike = othersError(FitOptions{});
+  const float discounted = othersError(weighted);
+  EXPECT_GT(alike, 0.001f);
+  EXPECT_LT(discounted, 0.25f * alike);
+}
+
+TEST(FitErrors, WeightsMustMatchTheTargets) {
+  const std::array<Vec3, 21> targets =
+      keypoints21(hand(), forwardKinematics(hand(), zeroAngles(hand())));
+  std::array<float, 20> tooFew;
+  tooFew.fill(1.0f);
+  FitOptions options;
+  options.weights = tooFew;
+  Result<FitResult> fit = fitToKeypoints(hand(), targets, options);
+  ASSERT_FALSE(fit.ok());
+  EXPECT_EQ(fit.message(), "fitToKeypoints: 20 weights for 21 targets");
+  std::array<float, 21> negative;
+  negative.fill(1.0f);
+  negative[3] = -0.5f;
+  options.weights = negative;
+  fit = fitToKeypoints(hand(), targets, options);
+  ASSERT_FALSE(fit.ok());
+  EXPECT_EQ(fit.message(), "fitToKeypoints: weight 3 is negative or not finite");
+}
+
 TEST(FitErrors, NonFiniteTarget) {
   std::array<Vec3, 21> targets = keypoints21(hand(), forwardKinematics(hand(), zeroAngles(hand())));
   targets[7].y() = std::numeric_limits<float>::quiet_NaN();

@@ -34,10 +34,10 @@ def check_same(hands, tracker, line):
         got = [[g6(v) for v in row] for row in hand.keypoints21]
         want = [[g6(v) for v in row] for row in cmd["keypoints21"]]
         assert got == want
-        # The report is blended toward the detector's keypoints: at most 0.6 x (1 - d / 10 cm)
-        # x d, so no keypoint moves more than 1.5 cm from the skeleton's.
+        # The report is blended toward the detector's keypoints: at most 0.8 x (1 - d / 10 cm)
+        # x d, so no keypoint moves more than 2 cm from the skeleton's.
         assert hand.skeleton_keypoints21.shape == (21, 3)
-        assert np.linalg.norm(hand.skeleton_keypoints21 - hand.keypoints21, axis=1).max() < 0.0151
+        assert np.linalg.norm(hand.skeleton_keypoints21 - hand.keypoints21, axis=1).max() < 0.0201
         assert [[g6(v) for v in row[:3]] for row in hand.openxr26] == [
             [g6(v) for v in j["p"]] for j in cmd["openxr26"]
         ]

@@ -338,7 +338,8 @@ const CommandRegistration kBenchCommand{Command{
       sub.add_option("--keypoints-from-truth", o->keypointsFromTruthMm,
                      "every item given the ground-truth keypoints plus Gaussian noise of this "
                      "standard deviation per axis (mm) instead of the learned detector's: what "
-                     "a perfect (0) or a given-noise detector would give")
+                     "a perfect (0) or a given-noise detector would give (the error is the "
+                     "tracked skeleton's, not the report's blend toward the given keypoints)")
           ->check(CLI::Range(0.0f, 100.0f));
       sub.add_option("--true-shape", o->trueShape,
                      "every item tracked with the default hand shaped like the rendered hand: "

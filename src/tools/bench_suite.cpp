@@ -520,7 +520,11 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
     const track::HandResult& h = r.hands.front();
     result.frameMs.push_back(r.timeMs);
     result.keypoints.groundTruth.push_back(frame.hands[0].keypoints);
-    result.keypoints.predicted.push_back(h.tracked ? std::optional<Keypoints21>(h.keypoints21)
+    // Given keypoints come at confidence 1, so the report's blend would copy them: what the
+    // tracking makes of them is the skeleton's own keypoints.
+    const Keypoints21& tracked =
+        item.truthKeypointsNoiseM >= 0.0f ? h.skeletonKeypoints21 : h.keypoints21;
+    result.keypoints.predicted.push_back(h.tracked ? std::optional<Keypoints21>(tracked)
                                                    : std::nullopt);
     result.detectorKeypoints.predicted.push_back(
         h.detected ? std::optional<Keypoints21>(h.detectorKeypoints21) : std::nullopt);

@@ -85,7 +85,9 @@ struct SuiteItem {
   /// >= 0: each frame the tracker is given the ground-truth keypoints, plus Gaussian noise of
   /// this standard deviation per axis (m), instead of the learned detector's
   /// (Tracker::setKeypoints, confidence 1): what a perfect or a given-noise detector would
-  /// give. < 0: the learned detector.
+  /// give. The error is then the tracked skeleton's (HandResult::skeletonKeypoints21), since
+  /// the report's blend would move the keypoints onto the given ones. < 0: the learned
+  /// detector, and the error is the report's (HandResult::keypoints21).
   float truthKeypointsNoiseM = -1.0f;
   /// Which of the rendered hand's shape factors (synth::HandProportions) the tracker's model
   /// is given (model::makeDefaultHand with a model::HandShape): what a model shaped like the

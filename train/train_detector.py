@@ -174,14 +174,22 @@ def import_dynahand(exe, module_dir=None):
 CACHE_CHECK = 64  # samples remade to check a cached file against the generator of today
 
 
-def make_file(dynahand, split, count, seed, path, threads, module):
+DEFAULT_SCENES = {"held_object_share": 0.15, "held_object_boxes": False}
+
+
+def make_file(dynahand, split, count, seed, path, threads, module, scenes=None):
     """Writes the data file (docs/formats/detector-data.md): dynahand.detector_data (module) or
-    the command, the same bytes either way."""
+    the command, the same bytes either way. scenes: the generator's scene settings
+    (DEFAULT_SCENES' keys)."""
+    scenes = scenes or DEFAULT_SCENES
     if module is None:
         subprocess.run([dynahand, "detector", "data", "--split", split, "--count", str(count),
-                        "--seed", str(seed), "--threads", str(threads), "-o", path], check=True)
+                        "--seed", str(seed), "--threads", str(threads),
+                        "--held-object-share", str(scenes["held_object_share"])]
+                       + (["--held-object-boxes"] if scenes["held_object_boxes"] else [])
+                       + ["-o", path], check=True)
         return
-    data = module.detector_data(split=split, count=count, seed=seed, threads=threads)
+    data = module.detector_data(split=split, count=count, seed=seed, threads=threads, **scenes)
     records = np.empty(count, RECORD)
     records["pixels"] = data["pixels"].reshape(count, -1)
     records["uvd"] = data["uvd"].reshape(count, -1)
@@ -192,13 +200,13 @@ def make_file(dynahand, split, count, seed, path, threads, module):
     os.replace(path + ".partial", path)
 
 
-def cache_is_current(dynahand, split, count, seed, path, threads, module):
+def cache_is_current(dynahand, split, count, seed, path, threads, module, scenes=None):
     """Whether a cached file holds what the generator makes today. Sample i depends on (seed, i)
     alone, so its first samples are remade and compared: a file from an older generator (another
     crop rule, other scenes) would otherwise train a network on data the tracker never shows it."""
     check = min(CACHE_CHECK, count)
     fresh = path + ".check"
-    make_file(dynahand, split, check, seed, fresh, threads, module)
+    make_file(dynahand, split, check, seed, fresh, threads, module, scenes)
     try:
         record = np.dtype(RECORD).itemsize
         with open(fresh, "rb") as f:
@@ -212,13 +220,13 @@ def cache_is_current(dynahand, split, count, seed, path, threads, module):
     return stored is not None and int(stored[1]) == count and cached == expected
 
 
-def generate(dynahand, split, count, seed, path, threads, module=None):
+def generate(dynahand, split, count, seed, path, threads, module=None, scenes=None):
     """The data file at path: kept when it is there and current, else made (again)."""
     if os.path.exists(path):
-        if cache_is_current(dynahand, split, count, seed, path, threads, module):
+        if cache_is_current(dynahand, split, count, seed, path, threads, module, scenes):
             return
         print(f"detector data: {path} was made by another generator; making it again", flush=True)
-    make_file(dynahand, split, count, seed, path, threads, module)
+    make_file(dynahand, split, count, seed, path, threads, module, scenes)
 
 
 def to_input(pixels, rng=None):
@@ -269,6 +277,10 @@ def main():
     p.add_argument("--init", default=None,
                    help="fine-tune: start from this detector.onnx (its folded weights, no batch "
                         "normalisation) instead of random weights")
+    p.add_argument("--held-object-share", type=float, default=DEFAULT_SCENES["held_object_share"],
+                   help="training scenes: share with an object held at the palm")
+    p.add_argument("--held-object-boxes", action="store_true",
+                   help="training scenes: held objects may be boxes as well as balls and cylinders")
     p.add_argument("--quick", action="store_true", help="a few steps on a small set (CI)")
     p.add_argument("--skip-if-no-torch", action="store_true",
                    help="exit 77 (CTest's skip) when python3-torch is not installed")
@@ -286,11 +298,14 @@ def main():
     torch.set_num_threads(a.threads)
     rng = np.random.default_rng(a.seed)
 
-    train_path = os.path.join(work, f"train_{a.train_count}_s{a.seed}.bin")
+    scenes = {"held_object_share": a.held_object_share, "held_object_boxes": a.held_object_boxes}
+    scene_tag = "" if scenes == DEFAULT_SCENES else \
+        f"_o{a.held_object_share:g}{'b' if a.held_object_boxes else ''}"
+    train_path = os.path.join(work, f"train_{a.train_count}_s{a.seed}{scene_tag}.bin")
     held_path = os.path.join(work, f"heldback_{a.heldback_count}_s{a.seed + 1000}.bin")
     t0 = time.time()
     module = import_dynahand(a.dynahand, a.python_module_dir)
-    generate(a.dynahand, "train", a.train_count, a.seed, train_path, a.threads, module)
+    generate(a.dynahand, "train", a.train_count, a.seed, train_path, a.threads, module, scenes)
     generate(a.dynahand, "held-back", a.heldback_count, a.seed + 1000, held_path, a.threads, module)
     data_s = time.time() - t0
     pixels, uvd = read_data(train_path)
@@ -343,7 +358,8 @@ def main():
         "format": "dynahand-detector-card", "version": 1,
         "input": [1, 1, CROP, CROP], "output": KEYPOINTS * 4, "parameters": params,
         "training": {"command": " ".join(["train/train_detector.py"] + sys.argv[1:]),
-                     "seed": a.seed, "init": a.init, "train_samples": a.train_count, "epochs": a.epochs,
+                     "seed": a.seed, "init": a.init, "train_samples": a.train_count,
+                     "scenes": scenes, "epochs": a.epochs,
                      "batch": a.batch, "lr": a.lr, "threads": a.threads,
                      "data_seconds": round(data_s), "train_seconds": round(train_s),
                      "torch": torch.__version__},

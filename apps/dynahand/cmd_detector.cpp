@@ -54,6 +54,12 @@ const CommandRegistration kDetectorCommand{Command{
                         "per-bone and per-finger shape factors in [1-s, 1+s]")
             ->capture_default_str()
             ->check(CLI::Range(0.0, 0.5));
+        app->add_option("--held-object-share", flags->data.heldObjectShare,
+                        "share of samples with an object held at the palm")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0, 1.0));
+        app->add_flag("--held-object-boxes", flags->data.heldObjectBoxes,
+                      "held objects may be boxes as well as balls and cylinders");
       }
       data->add_option("-o,--out", flags->out, "output file")->required();
       eval->add_option("--weights", flags->weights,

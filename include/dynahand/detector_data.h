@@ -32,6 +32,10 @@ struct DataOptions {
   DataSplit split = DataSplit::Train;  ///< training or held-back poses and hands
   int threads = 1;                     ///< worker threads (the bytes do not depend on it)
   float proportionSpread = 0.15f;      ///< per-bone / per-finger factors in [1 - s, 1 + s]
+  float heldObjectShare = 0.15f;       ///< share of samples with an object held at the palm
+  /// Held objects may be boxes (a third of them) as well as balls and cylinders; off, the
+  /// samples are those of the generator without boxes, byte for byte.
+  bool heldObjectBoxes = false;
 };
 
 /// Clips never used for training (the held-back motions).

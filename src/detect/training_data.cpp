@@ -283,19 +283,31 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
   pc.renderer.setBackground(w.planes, w.solids);
   pc.renderer.clear();
   drawHand(w, pc, hand, scale, radii, synth::PixelLabel::Hand0);
-  if (chance(rng, 0.15f)) {  // a held object at the palm: ball or cylinder
+  if (chance(rng, o.heldObjectShare)) {  // a held object at the palm: ball, cylinder or box
     const Vec3 palm = hand.keypoints[9] - hand.keypoints[0];
     const Vec3 across = hand.keypoints[5] - hand.keypoints[17];
     const Vec3 normalDir = across.cross(palm).normalized();  // palmar side, right hand
     const float r = uniform(rng, 0.015f, 0.04f);
     const Vec3 c = 0.5f * (hand.keypoints[0] + hand.keypoints[9]) + normalDir * (r + 0.015f);
-    synth::RoundCone object{c, c, r, r};
-    if (chance(rng, 0.5f)) {
-      const Vec3 axis = across.normalized() * uniform(rng, 0.03f, 0.08f);
-      object.a = c - axis;
-      object.b = c + axis;
+    if (o.heldObjectBoxes && chance(rng, 1.0f / 3.0f)) {
+      // Long side across the palm, tilted a little about the palm's normal.
+      const Vec3 side = (Eigen::AngleAxisf(normal(rng, 0.3f), normalDir) * across).normalized();
+      synth::OrientedBox box;
+      box.centre = c;
+      box.axes.col(0) = side;
+      box.axes.col(1) = normalDir;
+      box.axes.col(2) = side.cross(normalDir);
+      box.halfExtents = Vec3(uniform(rng, 0.03f, 0.08f), r, uniform(rng, 0.6f, 1.4f) * r);
+      pc.renderer.draw(box, synth::PixelLabel::Background);
+    } else {
+      synth::RoundCone object{c, c, r, r};
+      if (chance(rng, 0.5f)) {
+        const Vec3 axis = across.normalized() * uniform(rng, 0.03f, 0.08f);
+        object.a = c - axis;
+        object.b = c + axis;
+      }
+      pc.renderer.draw(std::span(&object, 1), synth::PixelLabel::Background);
     }
-    pc.renderer.draw(std::span(&object, 1), synth::PixelLabel::Background);
   }
   if (chance(rng, 0.1f)) {  // another hand beside this one, not nearer
     const Vec3 other = target + Vec3(uniform(rng, -0.25f, 0.25f), uniform(rng, -0.2f, 0.2f),

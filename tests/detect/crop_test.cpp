@@ -118,6 +118,33 @@ TEST(DetectorData, NearlyHalfTheSamplesSeeTheForearmComeTowardTheCamera) {
   EXPECT_LT(share, 0.65);
 }
 
+// The held-object settings: share 0 draws none, share 1 one in every sample, and boxes join the
+// balls and cylinders only when asked (without them a sample is what the generator made before
+// boxes existed; with share 0 the box setting draws nothing and changes no byte).
+TEST(DetectorData, HeldObjectsFollowTheirShareAndBoxesOnlyWhenAsked) {
+  DataOptions none;
+  none.seed = 9;
+  none.heldObjectShare = 0.0f;
+  DataOptions noneBoxes = none;
+  noneBoxes.heldObjectBoxes = true;
+  DataOptions all = none;
+  all.heldObjectShare = 1.0f;
+  DataOptions allBoxes = all;
+  allBoxes.heldObjectBoxes = true;
+  constexpr int kSamples = 12;
+  int changedByObject = 0, changedByBoxes = 0;
+  for (int i = 0; i < kSamples; ++i) {
+    const DataSample a = makeSample(none, i);
+    EXPECT_EQ(a.pixels, makeSample(noneBoxes, i).pixels) << "sample " << i;
+    const DataSample b = makeSample(all, i);
+    const DataSample c = makeSample(allBoxes, i);
+    changedByObject += a.pixels != b.pixels ? 1 : 0;
+    changedByBoxes += b.pixels != c.pixels ? 1 : 0;
+  }
+  EXPECT_GE(changedByObject, kSamples - 1);  // an object may hide behind the hand
+  EXPECT_GE(changedByBoxes, 1);
+}
+
 TEST(DetectorData, FileBytesDoNotDependOnThreads) {
   const auto dir = std::filesystem::temp_directory_path() /
                    ("dynahand-detector-data-" + std::to_string(::getpid()));

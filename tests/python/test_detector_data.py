@@ -26,11 +26,12 @@ def as_file(data):
         for i in range(n))
 
 
-@pytest.mark.parametrize("split, count, seed, threads, spread", [
-    ("train", 40, 5, 1, None),
-    ("held-back", 24, 9, 2, 0.1),
+@pytest.mark.parametrize("split, count, seed, threads, spread, objects", [
+    ("train", 40, 5, 1, None, None),
+    ("held-back", 24, 9, 2, 0.1, None),
+    ("train", 24, 6, 2, None, (0.6, True)),
 ])
-def test_same_bytes_as_command(tmp_path, split, count, seed, threads, spread):
+def test_same_bytes_as_command(tmp_path, split, count, seed, threads, spread, objects):
     out = tmp_path / "data.bin"
     args = ["detector", "data", "--split", split, "--count", count, "--seed", seed,
             "--threads", 2, "-o", out]
@@ -38,6 +39,9 @@ def test_same_bytes_as_command(tmp_path, split, count, seed, threads, spread):
     if spread is not None:
         args += ["--proportion-spread", spread]
         kwargs["proportion_spread"] = spread
+    if objects is not None:
+        args += ["--held-object-share", objects[0]] + (["--held-object-boxes"] if objects[1] else [])
+        kwargs.update(held_object_share=objects[0], held_object_boxes=objects[1])
     run(*args)
     data = dynahand.detector_data(split=split, count=count, seed=seed, threads=threads, **kwargs)
     assert data["pixels"].dtype == np.uint8 and data["pixels"].shape == (count, 64, 64)
@@ -74,6 +78,14 @@ def test_training_script_makes_the_same_file(tmp_path, monkeypatch):
     train_detector.generate(exe, "held-back", 20, 3, str(by_module), 2)
     assert by_module.read_bytes() == by_command.read_bytes()
     assert not list(tmp_path.glob("*.check"))
+    # The scene settings (--held-object-share, --held-object-boxes) reach both generators.
+    scenes = {"held_object_share": 0.7, "held_object_boxes": True}
+    objects_command, objects_module = tmp_path / "objects_command.bin", tmp_path / "objects_module.bin"
+    train_detector.generate(exe, "train", 12, 4, str(objects_command), 2, None, scenes)
+    train_detector.generate(exe, "train", 12, 4, str(objects_module), 2, dynahand, scenes)
+    assert objects_module.read_bytes() == objects_command.read_bytes()
+    train_detector.generate(exe, "train", 12, 4, str(by_module), 2, dynahand)
+    assert objects_module.read_bytes() != by_module.read_bytes()
 
 
 def script_module(tmp_path, exe, module_dir=None, pythonpath=None):

@@ -59,7 +59,7 @@ struct DetectorSettings {
   /// The model fitted to the detection (the detector-fit simulation's start) weighs each
   /// keypoint's squared distance by its confidence to this power (dimensionless; 0: all
   /// alike). The confidence is calibrated: the shipped weights' keypoints at 0.6-0.7 are off
-  /// by about 10 mm on average, those at 0.2-0.3 by about 40 mm (docs/detector.md).
+  /// by about 8 mm on average, those at 0.2-0.3 by about 35 mm (docs/tracker.md).
   float fitConfidenceExponent = 3.0f;
   /// ... and when the frame-start pose's keypoints are farther than this (m, mean over the
   /// confident keypoints) from the detector's: closer, its noise has nothing to add. Lower

@@ -61,6 +61,16 @@ struct DetectorSettings {
   /// alike). The confidence is calibrated: the shipped weights' keypoints at 0.6-0.7 are off
   /// by about 8 mm on average, those at 0.2-0.3 by about 35 mm (docs/tracker.md).
   float fitConfidenceExponent = 3.0f;
+  /// When the detector fit starts from the frame-start pose (the detection within 3 cm of it:
+  /// the hand is in the right basin), each of the pose's 21 keypoints is also a target where
+  /// that pose has it, with this weight (dimensionless; a detected keypoint weighs its
+  /// confidence to fitConfidenceExponent, 1 when sure). The keypoints the detector is unsure
+  /// of (below 0.33 in confidence, 0.33^3 = 0.035: mostly joints hidden from the camera)
+  /// then move the fitted start less than the motion so far holds it; the sure ones still
+  /// move it. It smooths the unsure keypoints' jumps from frame to frame; a guess repeated
+  /// frame after frame is still followed, more slowly. 0: the detection alone
+  /// (docs/tracker.md, "Learned detector").
+  float fitStartPoseWeight = 0.035f;
   /// ... and when the frame-start pose's keypoints are farther than this (m, mean over the
   /// confident keypoints) from the detector's: closer, its noise has nothing to add. Lower
   /// engages the detector-fit simulation on more frames (more accurate, about 0.3-0.45 ms a

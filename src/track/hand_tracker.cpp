@@ -190,11 +190,30 @@ bool HandTracker::fitDetectorPose(const model::JointAngles* warmStart) {
     detectorPoseTried_ = true;
     model::FitOptions options;
     options.weights = fitWeights_;
+    std::span<const int> indices = fitIndices_;
+    std::span<const Vec3> targets = fitTargets_;
+    const float startPoseWeight = settings_.detector.fitStartPoseWeight;
     if (warmStart != nullptr) {
       options.initial = warmStart;
       options.maxIterations = kWarmFitIterations;
+      if (startPoseWeight > 0.0f) {
+        // Each keypoint also where the frame starts: the motion so far outweighs the
+        // detector's unsure keypoints.
+        warmFitIndices_.assign(fitIndices_.begin(), fitIndices_.end());
+        warmFitTargets_.assign(fitTargets_.begin(), fitTargets_.end());
+        warmFitWeights_.assign(fitWeights_.begin(), fitWeights_.end());
+        const auto& modelIndices = model_->keypoints21Indices();
+        for (std::size_t i = 0; i < modelIndices.size(); ++i) {
+          warmFitIndices_.push_back(modelIndices[i]);
+          warmFitTargets_.push_back(startKeypoints_[i]);
+          warmFitWeights_.push_back(startPoseWeight);
+        }
+        indices = warmFitIndices_;
+        targets = warmFitTargets_;
+        options.weights = warmFitWeights_;
+      }
     }
-    Result<model::FitResult> fit = fitter_.fit(fitIndices_, fitTargets_, options);
+    Result<model::FitResult> fit = fitter_.fit(indices, targets, options);
     if (fit) {
       model::forwardKinematicsInto(*model_, fit->angles, detectorPose_);
       haveDetectorPose_ = true;
@@ -457,8 +476,8 @@ void HandTracker::prepareFrameStart(const HandFrame& frame) {
   bool engageDetector = false;
   bool warmFit = false;
   if (keypoints_ != nullptr) {
-    scratchKeypoints_ = model::keypoints21(*model_, pose_);
-    const float distance = detectorDistance(scratchKeypoints_);
+    startKeypoints_ = model::keypoints21(*model_, pose_);
+    const float distance = detectorDistance(startKeypoints_);
     engageDetector = distance > settings_.detector.engageDistanceM;
     warmFit = distance < kWarmFitDistanceM;
   }

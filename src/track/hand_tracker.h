@@ -175,6 +175,12 @@ class HandTracker {
   std::vector<int> fitIndices_;
   std::vector<Vec3> fitTargets_;
   std::vector<float> fitWeights_;  // per target, the fit's weight (detector confidence)
+  // The warm fit's targets: the detection's above, then the frame-start pose's keypoints
+  // (DetectorSettings::fitStartPoseWeight).
+  std::vector<int> warmFitIndices_;
+  std::vector<Vec3> warmFitTargets_;
+  std::vector<float> warmFitWeights_;
+  Keypoints21 startKeypoints_{};  // the frame-start pose's (prepareFrameStart)
   std::vector<LabelledPoint> detectorLabels_;
   model::ModelPose detectorPose_;
   bool haveDetectorPose_ = false;

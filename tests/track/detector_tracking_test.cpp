@@ -375,8 +375,10 @@ TEST(DetectorTracking, AgreementWithTheDetectorChoosesAmongTheSimulations) {
 // A cylinder held across the palm, seen from the desk (grasp-cylinder at 2.5x speed): its
 // samples, up to half of the hand's segment, pull the palm and fingers onto it unless the points
 // far from the detected skeleton are left out (DetectorSettings::objectDistanceM): every point
-// 18.6 / 18.7 mm (cylinder / box), without the object's 17.3 / 13.7 mm; each object gains, the
-// two by 3.2 mm on average.
+// 17.8 / 16.0 mm (cylinder / box), without the object's 16.7 / 15.2 mm; each object gains, the
+// two by 0.9 mm on average. (The detector fit's start-pose targets, fitStartPoseWeight, already
+// keep part of the pull off this default-shaped hand; on the motion suite's held-object rows,
+// hands shaped otherwise, leaving the points out gains 1.0-2.8 mm: docs/tracker.md.)
 TEST(DetectorTracking, AHeldObjectsPointsAreLeftOut) {
   double gained = 0.0;
   for (const auto object : {synth::HeldObject::Cylinder, synth::HeldObject::Box}) {
@@ -397,7 +399,7 @@ TEST(DetectorTracking, AHeldObjectsPointsAreLeftOut) {
     EXPECT_LT(handOnly, pulled) << synth::heldObjectName(object);
     gained += 0.5 * (pulled - handOnly);
   }
-  EXPECT_GT(gained, 0.002) << "mean gain over the two objects, m";
+  EXPECT_GT(gained, 0.0005) << "mean gain over the two objects, m";
 }
 
 // An open hand facing the camera, and the tracker started with it turned 180 degrees about

@@ -510,9 +510,10 @@ TEST(DetectorTracking, TheFitFromTheStartPoseKeepsWhatTheDetectorIsUnsureOf) {
   };
   const double withStartPose = indexError(TrackerSettings{}.detector.fitStartPoseWeight);
   const double detectionAlone = indexError(0.0f);
-  std::printf("index finger after a frame: with the start pose's targets %.1f mm, the detection "
-              "alone %.1f mm\n",
-              withStartPose * 1000, detectionAlone * 1000);
+  std::printf(
+      "index finger after a frame: with the start pose's targets %.1f mm, the detection "
+      "alone %.1f mm\n",
+      withStartPose * 1000, detectionAlone * 1000);
   EXPECT_LT(withStartPose, 0.7 * detectionAlone);
 }
 

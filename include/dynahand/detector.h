@@ -64,9 +64,19 @@ struct HandCrop {
 /// hand is centred.
 Vec3 keypointBoxCentre(const std::array<Vec3, kKeypointCount>& points);
 
+/// Two hands in one segment (HandSplitter's clusters, m, camera frame): the crop of the hand
+/// whose cluster centre is `own` leaves out the pixels whose point lies nearer `other`, as the
+/// split labels the cloud's points, so the network sees one hand as in its training crops.
+struct CropHandSplit {
+  Vec3 own = Vec3::Zero();    ///< this hand's cluster centre, m
+  Vec3 other = Vec3::Zero();  ///< the other hand's cluster centre, m
+};
+
 /// Fills `out` from a processed cloud frame (its mask, depth and segment centroid). `centre`
-/// overrides the centroid (m, camera frame) when given. False when nothing is segmented.
-bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3* centre = nullptr);
+/// overrides the centroid (m, camera frame) when given; `split`, when given, leaves the other
+/// hand's pixels out. False when nothing is segmented.
+bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3* centre = nullptr,
+              const CropHandSplit* split = nullptr);
 
 /// Where a first crop is centred when the segment is a limb attached to the body
 /// (CloudFrame::segment.limbEndFound): the mean of `points` (m, camera frame) within radiusM of

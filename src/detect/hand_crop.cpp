@@ -23,6 +23,16 @@ Vec3 CropFrame::toCrop(const Intrinsics& k, const Vec3& p) const {
   return {u, (pv - centreV) / halfPixels, (p.z() - centreZ) / (kCropSizeM * 0.5f)};
 }
 
+namespace {
+
+// Whether pixel (u, v) at depth z lies nearer the own hand's cluster centre than the other's.
+bool ownHand(const Intrinsics& k, int u, int v, float z, const CropHandSplit& split) {
+  const Vec3 p = k.deproject(static_cast<float>(u), static_cast<float>(v), z);
+  return (p - split.own).squaredNorm() <= (p - split.other).squaredNorm();
+}
+
+}  // namespace
+
 Vec3 keypointBoxCentre(const std::array<Vec3, kKeypointCount>& points) {
   Vec3 lo = points[0], hi = points[0];
   for (const Vec3& p : points) {
@@ -32,7 +42,8 @@ Vec3 keypointBoxCentre(const std::array<Vec3, kKeypointCount>& points) {
   return 0.5f * (lo + hi);
 }
 
-bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3* centre) {
+bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3* centre,
+              const CropHandSplit* split) {
   const Intrinsics& k = cloud.intrinsics;
   const Vec3 c = centre != nullptr ? *centre : cloud.segment.centroid;
   if ((centre == nullptr && !cloud.segment.found) || !(c.z() > 0.05f)) return false;
@@ -59,7 +70,8 @@ bool makeCrop(const CloudFrame& cloud, bool mirrored, HandCrop& out, const Vec3*
           cloud.mask[static_cast<std::size_t>(v) * static_cast<std::size_t>(k.width) +
                      static_cast<std::size_t>(u)] != 0) {
         const float z = cloud.depthAt(u, v);
-        if (z > 0.0f) value = std::clamp((z - f.centreZ) * inverseHalfDepth, -1.0f, 1.0f);
+        if (z > 0.0f && (split == nullptr || ownHand(k, u, v, z, *split)))
+          value = std::clamp((z - f.centreZ) * inverseHalfDepth, -1.0f, 1.0f);
       }
       line[col] = value;
     }

@@ -233,10 +233,20 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       // The learned detector on this hand's crop (left hands mirrored into right ones).
       const Vec3* centre = nullptr;
       Vec3 clusterCentre;
+      // Two hands found: each crop leaves out the other hand's pixels. Touching hands are one
+      // segment, and the network, trained on crops that rarely hold a second hand, reads the
+      // other hand's fingers as its own.
+      detect::CropHandSplit handSplit;
+      const detect::CropHandSplit* split = nullptr;
       if (handCount == 2) {
         const auto& cluster = m.split[h == 0 ? Hand::kRight : Hand::kLeft];
+        const auto& other = m.split[h == 0 ? Hand::kLeft : Hand::kRight];
         clusterCentre = cluster.centroid;
         centre = cluster.present ? &clusterCentre : nullptr;
+        if (cluster.present && other.present) {
+          handSplit = {cluster.centroid, other.centroid};
+          split = &handSplit;
+        }
       }
       detect::DetectedKeypoints& k = m.keypoints[h];
       // The crop is centred on the hand where last frame's detection found it, while that
@@ -261,14 +271,14 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       const bool mirrored = h == 1;
       k.valid = false;
       if (onHand) {
-        if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre))
+        if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre, split))
           k = m.keypointDetector->detect(m.crop, m.intrinsics);
       } else if ((handCount == 1 || centre != nullptr) &&
-                 detect::makeCrop(m.cloud, mirrored, m.crop, centre)) {
+                 detect::makeCrop(m.cloud, mirrored, m.crop, centre, split)) {
         k = m.keypointDetector->detect(m.crop, m.intrinsics);
         if (k.valid) {
           handCentre = detect::keypointBoxCentre(k.points);
-          if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre)) {
+          if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre, split)) {
             const detect::DetectedKeypoints& centred =
                 m.keypointDetector->detect(m.crop, m.intrinsics);
             if (centred.valid) k = centred;

@@ -78,6 +78,53 @@ TEST(HandCrop, RenderedHandFillsTheCropAroundItsKeypoints) {
   }
 }
 
+// Two touching hands are one segment; given the two hands' centres, a hand's crop keeps its
+// own pixels as they were and leaves out those whose point lies nearer the other hand.
+TEST(HandCrop, TheOtherHandOfTwoIsLeftOut) {
+  auto seq = synth::SyntheticSequence::create(test::clipOptions("hands-touching", "tof", 1));
+  ASSERT_TRUE(seq);
+  const synth::SyntheticFrame& frame = seq->frame(0);
+  ASSERT_EQ(frame.hands.size(), 2u);
+  CloudPipeline pipeline(seq->intrinsics());
+  CloudFrame cloud;
+  ASSERT_TRUE(pipeline.process(frame.depth, cloud));
+  const auto centreOf = [](const synth::HandKeypoints& k) {
+    Vec3 sum = Vec3::Zero();
+    for (const Vec3& p : k) sum += p;
+    return Vec3(sum / static_cast<float>(k.size()));
+  };
+  const Vec3 right = centreOf(frame.hands[0].keypoints), left = centreOf(frame.hands[1].keypoints);
+  const Vec3 centre = keypointBoxCentre(frame.hands[0].keypoints);
+  const CropHandSplit split{right, left};
+  HandCrop whole, own;
+  ASSERT_TRUE(makeCrop(cloud, false, whole, &centre));
+  ASSERT_TRUE(makeCrop(cloud, false, own, &centre, &split));
+  const Intrinsics& k = seq->intrinsics();
+  int otherHand = 0, kept = 0;
+  for (std::size_t i = 0; i < whole.pixels.size(); ++i) {
+    if (whole.pixels[i] >= 1.0f) {
+      EXPECT_EQ(own.pixels[i], 1.0f);
+      continue;
+    }
+    const int row = static_cast<int>(i) / kCropPixels, col = static_cast<int>(i) % kCropPixels;
+    const Vec3 uvd((static_cast<float>(col) + 0.5f) * 2.0f / kCropPixels - 1.0f,
+                   (static_cast<float>(row) + 0.5f) * 2.0f / kCropPixels - 1.0f, whole.pixels[i]);
+    const Vec3 p = whole.frame.toCamera(k, uvd);
+    // Pixels on the boundary between the two hands may go either way (pixel centres round).
+    const float margin = (p - right).norm() - (p - left).norm();
+    if (margin > 0.005f) {
+      ++otherHand;
+      EXPECT_EQ(own.pixels[i], 1.0f) << "the other hand's pixel " << i << " is kept";
+    } else if (margin < -0.005f) {
+      ++kept;
+      EXPECT_EQ(own.pixels[i], whole.pixels[i]) << "an own pixel changed";
+    }
+  }
+  std::printf("crop pixels of the right hand %d, of the touching left hand %d\n", kept, otherHand);
+  EXPECT_GT(otherHand, 100) << "the other hand lies in the crop";
+  EXPECT_GT(kept, kCropPixels * kCropPixels / 10);
+}
+
 TEST(DetectorData, SamplesAreDeterministicAndLabelledInsideTheCrop) {
   DataOptions o;
   o.seed = 5;

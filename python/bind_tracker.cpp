@@ -460,7 +460,8 @@ void bindTracker(py::module_& m) {
                     "Whether this frame (re)acquired the hand from scratch.")
       .def_readonly("points", &HandOut::points, "Sample points used.")
       .def_readonly("data_near_model", &HandOut::dataNearModel,
-                    "Share of the hand's sample points within 10 mm of the model.")
+                    "Share of the hand's sample points within 10 mm of the model (those "
+                    "beyond its wrist left out).")
       .def_readonly("model_on_hand", &HandOut::modelOnHand,
                     "Share of the camera-facing model surface over segmented pixels.")
       .def_readonly("fingertips_off_hand", &HandOut::fingertipsOffHand,

@@ -4,7 +4,8 @@ for the bench's small / medium / large hands and three clips (tof), the size
 `dynahand track --hand-size auto` estimates against the truth, and the mean 21-keypoint error
 tracked with the default model and with the estimated one.
 
-usage: scripts/hand_size_figures.py [--init gt|auto] [--frames 90] [--dynahand PATH] [--work DIR]
+usage: scripts/hand_size_figures.py [--init gt|auto] [--placement desk|head] [--frames 90]
+                                    [--dynahand PATH] [--work DIR]
 """
 import argparse
 import os
@@ -19,6 +20,8 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     p = argparse.ArgumentParser()
     p.add_argument('--init', default='gt', choices=['gt', 'auto'])
+    p.add_argument('--placement', default='desk', choices=['desk', 'head'],
+                   help='camera facing the user, or worn on the head (forearm toward it)')
     p.add_argument('--frames', type=int, default=90)
     p.add_argument('--dynahand', default=os.path.join(here, '..', 'build', 'release', 'apps', 'dynahand'))
     p.add_argument('--work', default='/tmp/dynahand-hand-size')
@@ -40,10 +43,11 @@ def main():
     print('| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |')
     for name, length, width in SIZES:
         for clip in CLIPS:
-            clip_dir = os.path.join(a.work, f'{name}-{clip}-{a.frames}')
+            clip_dir = os.path.join(a.work, f'{name}-{clip}-{a.placement}-{a.frames}')
             if not os.path.isdir(clip_dir):
                 run(['synth', '--motion', clip, '--profile', 'tof', '--frames', str(a.frames),
-                     '--hand-length', str(length), '--hand-width', str(width), '--out', clip_dir])
+                     '--placement', a.placement, '--hand-length', str(length),
+                     '--hand-width', str(width), '--out', clip_dir])
             default = keypoint_error(run(['track', clip_dir, '--init', a.init]))
             out = run(['track', clip_dir, '--init', a.init, '--hand-size', 'auto'])
             m = re.search(r'hand size estimate: length ([\d.]+) m  width ([\d.]+) m .*fit ([\d.]+), '

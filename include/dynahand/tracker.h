@@ -207,6 +207,7 @@ struct TrackerSettings {
 /// How well the fitted hand explains the data (beyond the paper's metric):
 struct FitQuality {
   float dataNearModel = 0.0f;  ///< share of the hand's sample points within 10 mm of the model
+                               ///< (those beyond its wrist left out)
   float modelOnHand = 0.0f;    ///< share of the camera-facing model surface (by area as seen
                                ///< from the camera, forearm excluded) that projects onto
                                ///< segmented pixels

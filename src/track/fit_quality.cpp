@@ -30,13 +30,17 @@ bool onMask(const CloudFrame& cloud, float uf, float vf, int extra = 0) {
 }  // namespace
 
 FitQuality measureFitQuality(const PosedBodies& bodies, std::span<const float> pointDistances,
+                             std::span<const Vec3> points, const WristPlane* wrist,
                              const CloudFrame& cloud, int skipBody, std::span<const Vec3> tips) {
   FitQuality q;
-  if (!pointDistances.empty()) {
-    const auto near = std::count_if(pointDistances.begin(), pointDistances.end(),
-                                    [](float d) { return d <= kNearSurfaceM; });
-    q.dataNearModel = static_cast<float>(near) / static_cast<float>(pointDistances.size());
+  const bool cut = wrist != nullptr && points.size() == pointDistances.size();
+  int counted = 0, near = 0;
+  for (std::size_t i = 0; i < pointDistances.size(); ++i) {
+    if (cut && (points[i] - wrist->wrist).dot(wrist->towardElbow) > 0.0f) continue;
+    ++counted;
+    near += pointDistances[i] <= kNearSurfaceM ? 1 : 0;
   }
+  if (counted > 0) q.dataNearModel = static_cast<float>(near) / static_cast<float>(counted);
   // Camera-facing faces, by area, whose centre projects onto a segmented pixel.
   double facing = 0.0, onHand = 0.0;
   for (int b = 0; b < bodies.size(); ++b) {

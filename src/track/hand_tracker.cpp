@@ -447,8 +447,10 @@ void HandTracker::track(const HandFrame& frame, HandResult& out) {
     for (std::size_t f = 0; f < 5; ++f) tips[f] = out.skeletonKeypoints21[4 + 4 * f];
     // bestBreakdown_ was measured at exactly these poses: its point distances are this
     // pose's.
-    out.quality = measureFitQuality(posed_, bestBreakdown_.pointDistance, *hand.cloud,
-                                    rig_.anatomy().forearm, tips);
+    const Keypoints21& k = out.skeletonKeypoints21;
+    const WristPlane wrist{k[0], (k[0] - k[9]).normalized()};
+    out.quality = measureFitQuality(posed_, bestBreakdown_.pointDistance, hand.points, &wrist,
+                                    *hand.cloud, rig_.anatomy().forearm, tips);
   } else {
     out.quality = FitQuality{};
   }
@@ -723,8 +725,8 @@ void HandTracker::acquire(const HandFrame& frame, HandResult& out) {
       std::array<Vec3, 5> tips;
       for (std::size_t f = 0; f < 5; ++f) tips[f] = scratchKeypoints_[4 + 4 * f];
       score += kOffHandTipPenaltyM *
-               static_cast<float>(measureFitQuality(posed_, error_.pointDistance, *frame.cloud,
-                                                    rig_.anatomy().forearm, tips)
+               static_cast<float>(measureFitQuality(posed_, error_.pointDistance, {}, nullptr,
+                                                    *frame.cloud, rig_.anatomy().forearm, tips)
                                       .fingertipsOffHand);
     }
     if (score < bestScore) {

@@ -60,7 +60,7 @@ TEST(HandSize, EstimatesASmallAndALargeHand) {
 
 // From a head-mounted camera the forearm comes toward the camera and the segmentation keeps
 // much of it: the score leaves the samples beyond the model's wrist out, else the candidate with
-// the longest forearm covers the most of them and wins (a small hand came out 45 % long).
+// the longest forearm covers the most of them and wins.
 // From the head the fingers point away and show less of their length: 10 %.
 TEST(HandSize, EstimatesASmallHandSeenFromTheHead) {
   const model::HandDimensions truth{0.165f, 0.075f};

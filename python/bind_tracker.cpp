@@ -264,9 +264,11 @@ class PyTracker {
       hand_ = std::move(*loaded);
     } else if (!autoSize) {
       model::HandDimensions size;  // `dynahand track`'s default, 0.19 x 0.085 m
+      model::HandShape shape;
       if (py::isinstance<track::HandSizeEstimate>(handSize)) {
         estimate_ = handSize.cast<track::HandSizeEstimate>();
         size = estimate_->dimensions;
+        shape = estimate_->shape;
       } else if (!handSize.is_none()) {
         try {
           const auto pair = handSize.cast<std::pair<float, float>>();
@@ -277,7 +279,7 @@ class PyTracker {
       }
       checkLength(size.length, "hand_size: length");
       checkWidth(size.width, "hand_size: width");
-      hand_ = model::makeDefaultHand(size);
+      hand_ = model::makeDefaultHand(size, model::Side::Right, shape);
       handSize_ = io::HandSizeRecord{size};
     }
 
@@ -301,11 +303,9 @@ class PyTracker {
       options.threads = threads;
       estimate_ = estimateSize(frames.is_none() ? camera : frames, intrinsics_, fps_, 0.001f,
                                std::nullopt, handSizeFrames, options);
-      hand_ = model::makeDefaultHand(estimate_->dimensions);
+      hand_ = model::makeDefaultHand(estimate_->dimensions, model::Side::Right, estimate_->shape);
     }
-    if (estimate_)
-      handSize_ = io::HandSizeRecord{estimate_->dimensions, true, estimate_->framesUsed,
-                                     estimate_->fitScore};
+    if (estimate_) handSize_ = io::HandSizeRecord::fromEstimate(*estimate_);
     auto created = track::Tracker::create(*hand_, intrinsics_, settings);
     if (!created) {
       if (!settings.detector.weights.empty()) throw FileError(created.message());
@@ -500,7 +500,16 @@ void bindTracker(py::module_& m) {
       .def_readonly("frames_used", &track::HandSizeEstimate::framesUsed,
                     "Frames each candidate model tracked.")
       .def_readonly("candidates", &track::HandSizeEstimate::candidates,
-                    "Candidate models tracked (13; 7 with a length or width given).")
+                    "Candidate models tracked (13 for the size, 7 with a length or width "
+                    "given; up to 24 more for the metacarpals).")
+      .def_property_readonly(
+          "metacarpals",
+          [](const track::HandSizeEstimate& e) {
+            const auto& b = e.shape.boneLength;
+            return py::make_tuple(b[0][0], b[1][0], b[2][0], b[3][0], b[4][0]);
+          },
+          "Each digit's metacarpal length factor, thumb to pinky (1: the built-in hand's; 1 "
+          "when no frame showed the palm to the camera).")
       .def(
           "to_dict",
           [](const track::HandSizeEstimate& e) {
@@ -510,6 +519,9 @@ void bindTracker(py::module_& m) {
             d["fit_score"] = e.fitScore;
             d["frames_used"] = e.framesUsed;
             d["candidates"] = e.candidates;
+            py::list metacarpals;
+            for (const auto& digit : e.shape.boneLength) metacarpals.append(digit[0]);
+            d["metacarpals"] = metacarpals;
             return d;
           },
           "The estimate as a dict.")

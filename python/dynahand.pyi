@@ -109,7 +109,11 @@ class HandSize:
     def frames_used(self) -> int: ...
     @property
     def candidates(self) -> int:
-        """Candidate models tracked (13; 7 with a length or width given)."""
+        """Candidate models tracked (13 for the size, 7 with a length or width given; up to 24
+        more for the metacarpals)."""
+    @property
+    def metacarpals(self) -> tuple[float, float, float, float, float]:
+        """Each digit's metacarpal length factor, thumb to pinky (1: the built-in hand's)."""
     def to_dict(self) -> dict: ...
 
 class Tracker:

@@ -212,7 +212,8 @@ int runRender(const RenderOptions& o) {
   // by track), unless a model or a size is given here.
   const auto& trackedSize = frames->front().handSize;
   if (trackedSize && o.hand.modelFile.empty() && !o.hand.lengthGiven() && !o.hand.widthGiven())
-    right = model::makeDefaultHand(trackedSize->dimensions);
+    right =
+        model::makeDefaultHand(trackedSize->dimensions, model::Side::Right, trackedSize->shape());
   const model::ArticulatedModel left = model::mirrorModel(right);
 
   std::vector<const io::TrackedFrame*> chosen;

@@ -26,6 +26,7 @@ struct TrackOptions {
   HandModelOptions hand;
   std::string handSize = "given";  // or "auto": estimateHandSize over the first frames
   int handSizeFrames = 30;
+  bool sizeOnly = false;  // --hand-size auto without the metacarpals
   int hands = 1, threads = 1, start = 0, frames = -1;
   bool perFrame = false, candidates = false;
   bool behindUser = false;  // --behind-user: two hands, camera worn or behind the user
@@ -183,6 +184,7 @@ std::optional<io::HandSizeRecord> sizeHand(const TrackOptions& o, FrameInput& in
   hs.threads = o.threads;
   if (o.hand.lengthGiven()) hs.length = o.hand.length;
   if (o.hand.widthGiven()) hs.width = o.hand.width;
+  hs.metacarpals = !o.sizeOnly;
   std::printf("hand size: estimating from frames %d-%d...\n", first, first + count - 1);
   std::fflush(stdout);
   const auto started = std::chrono::steady_clock::now();
@@ -190,14 +192,20 @@ std::optional<io::HandSizeRecord> sizeHand(const TrackOptions& o, FrameInput& in
   if (!estimate) throw std::runtime_error("--hand-size auto: " + estimate.message());
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  const io::HandSizeRecord record = io::HandSizeRecord::fromEstimate(*estimate);
   std::printf(
       "hand size estimate: length %.4f m  width %.4f m  (%d frames, %d candidate models, fit "
       "%.3f, %.1f s)\n",
       static_cast<double>(estimate->dimensions.length),
       static_cast<double>(estimate->dimensions.width), estimate->framesUsed, estimate->candidates,
       static_cast<double>(estimate->fitScore), seconds);
-  hand = model::makeDefaultHand(estimate->dimensions);
-  return io::HandSizeRecord{estimate->dimensions, true, estimate->framesUsed, estimate->fitScore};
+  std::printf(
+      "hand shape estimate: metacarpals (thumb..pinky) %.3f %.3f %.3f %.3f %.3f\n",
+      static_cast<double>(record.metacarpals[0]), static_cast<double>(record.metacarpals[1]),
+      static_cast<double>(record.metacarpals[2]), static_cast<double>(record.metacarpals[3]),
+      static_cast<double>(record.metacarpals[4]));
+  hand = model::makeDefaultHand(estimate->dimensions, model::Side::Right, record.shape());
+  return record;
 }
 
 // The files written as frames are tracked (JSON lines, CSV) and at the end (BVH).
@@ -383,8 +391,12 @@ const CommandRegistration kTrackCommand{Command{
                      "given (--hand-length / --hand-width, default 0.19 / 0.085), or auto: "
                      "estimate the built-in hand's size from the first --hand-size-frames frames "
                      "(13 candidate models tracked over them; a given --hand-length or "
-                     "--hand-width is kept), then track with it; the size goes into the output")
+                     "--hand-width is kept) and, from the frames that show the palm, each "
+                     "digit's metacarpal length (24 more), then track with it; the size and the "
+                     "metacarpals go into the output")
           ->check(CLI::IsMember({"given", "auto"}));
+      sub.add_flag("--hand-size-only", o->sizeOnly,
+                   "with --hand-size auto: the size alone, the built-in hand's metacarpals");
       sub.add_option("--hand-size-frames", o->handSizeFrames,
                      "frames --hand-size auto estimates from (default 30, 1 s at 30 fps)")
           ->check(CLI::Range(10, 600));

@@ -15,9 +15,17 @@
 ///   3. length alone at that width (-8 %, 0, +8 %), parabola peak, scored only over the frames
 ///      where the fingers are out straight: a too-long finger curls into a fist as well as
 ///      the right one.
-/// 13 candidate trackers; they run in parallel on `threads`. A length or width the caller
-/// gives is kept: then step 1 scales the other alone and steps 2-3 are left out (7 trackers;
-/// a length searched so scores every frame, fists included).
+///   4. each digit's metacarpal length (where its knuckle, or the thumb's base, sits on the
+///      palm; HandShape::boneLength[digit][0]), +-10 % then +-5 % about the estimate so far,
+///      parabola peak, half of it kept. Scored by the paper's error metric with every
+///      candidate started afresh on each frame from the estimate's tracked keypoints (runs of
+///      hands a few percent apart drift apart by chance), and only on frames where the palm
+///      faces the camera: seen from behind the metric prefers long metacarpals whatever the
+///      hand, so from a head-mounted camera the shape stays the default.
+/// 13 candidate trackers for the size, 24 for the shape (HandSizeOptions::metacarpals); they
+/// run in parallel on `threads`. A length or width the caller gives is kept: then step 1
+/// scales the other alone and steps 2-3 are left out (7 trackers; a length searched so scores
+/// every frame, fists included).
 /// Measured figures: docs/tracker.md, "Hand size".
 #pragma once
 
@@ -40,13 +48,19 @@ struct HandSizeOptions {
   int threads = 1;  ///< candidate trackers run in parallel; the result does not depend on it
   std::optional<float> length;  ///< m: a known length, kept (only the width is estimated)
   std::optional<float> width;   ///< m: a known width, kept (only the length is estimated)
+  /// Also estimate each digit's metacarpal length (step 4); false: the default shape.
+  bool metacarpals = true;
 };
 
 /// The result of estimateHandSize.
 struct HandSizeEstimate {
   model::HandDimensions dimensions;  ///< the estimate, m
-  int framesUsed = 0;                ///< frames each candidate tracked
-  int candidates = 0;                ///< candidate models tracked
+  /// The estimated shape: each digit's metacarpal length factor (boneLength[digit][0]; 1 where
+  /// no palm-facing frames were seen), every other factor 1. The hand to track is
+  /// model::makeDefaultHand(dimensions, side, shape).
+  model::HandShape shape;
+  int framesUsed = 0;  ///< frames each candidate tracked
+  int candidates = 0;  ///< candidate models tracked
   /// The best candidate's score: mean over the scored frames of the harmonic mean of
   /// FitQuality::dataNearModel and FitQuality::modelOnHand (0 in frames where it lost the
   /// hand), [0, 1]. About 0.98-0.99 on clean synthetic data; low values mean the estimate is

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "dynahand/atomic_file.h"
+#include "dynahand/hand_size.h"
 #include "dynahand/model.h"
 #include "dynahand/tracker.h"
 
@@ -28,6 +29,14 @@ struct HandSizeRecord {
   bool estimated = false;            ///< by estimateHandSize (hand_size.h); else given
   int frames = 0;                    ///< estimated: frames the estimate used
   float fitScore = 0.0f;             ///< estimated: HandSizeEstimate::fitScore
+  /// Each digit's metacarpal length factor (thumb..pinky; model::HandShape::boneLength[d][0]),
+  /// 1: the default hand's. Estimated ones: HandSizeEstimate::shape.
+  std::array<float, 5> metacarpals = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
+
+  /// The built-in hand's shape this record describes (its metacarpals; the rest 1).
+  model::HandShape shape() const;
+  /// The record of an estimate (estimated = true).
+  static HandSizeRecord fromEstimate(const track::HandSizeEstimate& estimate);
 };
 
 /// What trackResultToJson writes besides the keypoints.

@@ -42,7 +42,12 @@ void appendHandSize(std::string& s, const HandSizeRecord& size) {
     fmt::format_to(std::back_inserter(s),
                    ",\"source\":\"estimated\",\"frames\":{},\"fit\":", size.frames);
     appendNumber(s, size.fitScore);
-    s += "},";
+    s += ",\"metacarpals\":[";
+    for (std::size_t d = 0; d < size.metacarpals.size(); ++d) {
+      if (d > 0) s += ',';
+      appendNumber(s, size.metacarpals[d]);
+    }
+    s += "]},";
   } else {
     s += ",\"source\":\"given\"},";
   }
@@ -162,6 +167,19 @@ void appendHand(std::string& s, const track::HandResult& hand, const model::Arti
 }
 
 }  // namespace
+
+model::HandShape HandSizeRecord::shape() const {
+  model::HandShape shape;
+  for (std::size_t d = 0; d < metacarpals.size(); ++d) shape.boneLength[d][0] = metacarpals[d];
+  return shape;
+}
+
+HandSizeRecord HandSizeRecord::fromEstimate(const track::HandSizeEstimate& estimate) {
+  HandSizeRecord record{estimate.dimensions, true, estimate.framesUsed, estimate.fitScore};
+  for (std::size_t d = 0; d < record.metacarpals.size(); ++d)
+    record.metacarpals[d] = estimate.shape.boneLength[d][0];
+  return record;
+}
 
 std::string trackResultToJson(const track::TrackResult& r, const model::ArticulatedModel& model,
                               const JsonOptions& o) {

@@ -136,6 +136,18 @@ Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& pa
         record.estimated = size.value("source", std::string("given")) == "estimated";
         if (size.contains("frames")) record.frames = readInt(size["frames"], "hand_size.frames");
         if (size.contains("fit")) record.fitScore = readNumber(size["fit"]);
+        if (size.contains("metacarpals")) {
+          const json& factors = size["metacarpals"];
+          if (!factors.is_array() || factors.size() != record.metacarpals.size())
+            throw std::runtime_error("hand_size.metacarpals: not an array of 5 numbers");
+          for (std::size_t d = 0; d < record.metacarpals.size(); ++d) {
+            const float f = readNumber(factors[d]);
+            if (!(f >= 0.5f && f <= 2.0f))
+              throw std::runtime_error(
+                  fmt::format("hand_size.metacarpals[{}]: {} is not in [0.5, 2]", d, f));
+            record.metacarpals[d] = f;
+          }
+        }
         frame.handSize = record;
       }
       for (const json& h : j.at("hands")) frame.hands.push_back(readHand(h, model, bodyIndex));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,17 @@ constexpr float kHalfStep = 0.05f;
 // Stages 2 and 3: relative steps of width alone, then length alone.
 constexpr float kWidthStep = 0.07f;
 constexpr float kLengthStep = 0.08f;
+// Stage 4: each digit's metacarpal length factor, a coarse then a fine step about the
+// estimate so far; the result keeps this share of its offset from 1 (the scores
+// differ by little more than their noise: moved the whole way, a few hands came out worse
+// than with the default shape).
+constexpr std::array<float, 2> kMetacarpalSteps = {0.10f, 0.05f};
+constexpr float kMetacarpalShrink = 0.5f;
+// Stage 4 scores only frames where the palm faces the camera: the cosine between the back of
+// the hand's normal and the line of sight to the middle knuckle is at least this. From behind
+// (a head-mounted camera) the error metric prefers long metacarpals whatever the hand.
+constexpr float kPalmFacingCosine = 0.3f;
+constexpr int kMinPalmFacingFrames = 8;  // fewer: the shape stays the default
 
 // How well one tracked frame's hand explains the data both ways, [0, 1].
 float frameScore(const HandResult& hand) {
@@ -46,11 +58,29 @@ bool fingersOpen(const HandResult& hand) {
   return straight >= 3;
 }
 
-// One candidate's frames: score and whether its first hand had its fingers open.
+// One candidate's frames: score and whether its first hand had its fingers open; for stage
+// 4, its first hand's keypoints where tracked, and (restarted candidates) the paper's error,
+// negative where the hand was not tracked.
 struct CandidateFrames {
   std::vector<float> scores;
   std::vector<char> open;
+  std::vector<std::optional<Keypoints21>> keypoints;
+  std::vector<float> errors;
 };
+
+// A candidate model: the default hand at a size, with a shape.
+struct CandidateHand {
+  model::HandDimensions size;
+  model::HandShape shape;
+};
+
+// Whether the palm of a right hand with these keypoints faces the camera (kPalmFacingCosine).
+bool palmFacesCamera(const Keypoints21& k) {
+  const Vec3 distal = (k[9] - k[0]).normalized();
+  const Vec3 radial = (k[5] - k[17]).normalized();
+  const Vec3 dorsal = distal.cross(radial).normalized();  // model frame: y = z x x
+  return dorsal.dot(k[9].normalized()) >= kPalmFacingCosine;
+}
 
 // Mean score over the frames `use` marks (all when empty); frames while settling left out.
 float meanScore(const CandidateFrames& c, int settleFrames, const std::vector<char>& use = {}) {
@@ -79,14 +109,20 @@ class CandidateScorer {
     options_.tracker.scaleSegmentationToHand = false;
   }
 
-  // The given sizes, tracked in parallel.
+  // The given sizes (default shape), tracked in parallel.
   std::vector<CandidateFrames> track(const std::vector<model::HandDimensions>& sizes) {
-    std::vector<CandidateFrames> tracked(sizes.size());
-    pool_.run(static_cast<int>(sizes.size()), [&](int i) {
-      tracked[static_cast<std::size_t>(i)] = trackOne(sizes[static_cast<std::size_t>(i)]);
-    });
-    count_ += static_cast<int>(sizes.size());
-    return tracked;
+    std::vector<CandidateHand> hands;
+    for (const model::HandDimensions& size : sizes) hands.push_back({size, {}});
+    return run(hands, [this](const CandidateHand& hand) { return trackOne(hand); });
+  }
+  CandidateFrames track(const CandidateHand& hand) {
+    return run({hand}, [this](const CandidateHand& h) { return trackOne(h); }).front();
+  }
+  // The given hands, each started afresh on every frame from the reference's keypoints of
+  // that frame (where it has them) and tracked over that frame alone, in parallel.
+  std::vector<CandidateFrames> restart(const std::vector<CandidateHand>& hands,
+                                       const std::vector<std::optional<Keypoints21>>& reference) {
+    return run(hands, [&](const CandidateHand& hand) { return restartOne(hand, reference); });
   }
   // Their mean scores over all frames.
   std::vector<float> score(const std::vector<model::HandDimensions>& sizes) {
@@ -99,15 +135,38 @@ class CandidateScorer {
   int settleFrames() const { return settleFrames_; }
 
  private:
-  CandidateFrames trackOne(const model::HandDimensions& size) const {
+  template <typename TrackHand>
+  std::vector<CandidateFrames> run(const std::vector<CandidateHand>& hands,
+                                   const TrackHand& trackHand) {
+    std::vector<CandidateFrames> tracked(hands.size());
+    pool_.run(static_cast<int>(hands.size()), [&](int i) {
+      tracked[static_cast<std::size_t>(i)] = trackHand(hands[static_cast<std::size_t>(i)]);
+    });
+    count_ += static_cast<int>(hands.size());
+    return tracked;
+  }
+
+  CandidateFrames emptyFrames() const {
     CandidateFrames c;
     c.scores.assign(frames_.size(), 0.0f);
     c.open.assign(frames_.size(), 0);
-    // The candidates are scored on how well the paper's simulations alone fit each size: the
-    // detector-fit simulation would fit a wrong-sized hand to its keypoints as readily.
+    c.keypoints.assign(frames_.size(), std::nullopt);
+    c.errors.assign(frames_.size(), -1.0f);
+    return c;
+  }
+
+  // The candidates are scored on how well the paper's simulations alone fit each hand: the
+  // detector-fit simulation would fit a wrong-sized hand to its keypoints as readily.
+  Result<std::unique_ptr<Tracker>> makeTracker(const CandidateHand& hand) const {
     TrackerSettings settings = options_.tracker;
     settings.detector.enabled = false;
-    auto tracker = Tracker::create(model::makeDefaultHand(size), intrinsics_, settings);
+    return Tracker::create(model::makeDefaultHand(hand.size, model::Side::Right, hand.shape),
+                           intrinsics_, settings);
+  }
+
+  CandidateFrames trackOne(const CandidateHand& hand) const {
+    CandidateFrames c = emptyFrames();
+    auto tracker = makeTracker(hand);
     if (!tracker) return c;
     if (start_ && !(*tracker)->initializeFromKeypoints(*start_)) return c;
     for (std::size_t f = 0; f < frames_.size(); ++f) {
@@ -116,6 +175,24 @@ class CandidateScorer {
       for (const HandResult& h : r.hands) sum += frameScore(h);
       c.scores[f] = r.hands.empty() ? 0.0f : sum / static_cast<float>(r.hands.size());
       c.open[f] = !r.hands.empty() && fingersOpen(r.hands.front()) ? 1 : 0;
+      if (!r.hands.empty() && r.hands.front().tracked)
+        c.keypoints[f] = r.hands.front().skeletonKeypoints21;
+    }
+    return c;
+  }
+
+  // One frame at a time from the reference: what each candidate makes of a frame from the
+  // same start, free of how a whole run drifts (runs of candidates a few percent apart part
+  // ways by chance, and their scores with them).
+  CandidateFrames restartOne(const CandidateHand& hand,
+                             const std::vector<std::optional<Keypoints21>>& reference) const {
+    CandidateFrames c = emptyFrames();
+    auto tracker = makeTracker(hand);
+    if (!tracker) return c;
+    for (std::size_t f = 0; f < frames_.size(); ++f) {
+      if (!reference[f] || !(*tracker)->initializeFromKeypoints(*reference[f])) continue;
+      const TrackResult& r = (*tracker)->track(frames_[f]);
+      if (!r.hands.empty() && r.hands.front().tracked) c.errors[f] = r.hands.front().error;
     }
     return c;
   }
@@ -136,6 +213,56 @@ float parabolaPeak(float x, float h, float below, float centre, float above) {
   if (curvature >= 0.0f) return x;
   const float offset = 0.5f * h * (below - above) / curvature;
   return x + std::clamp(offset, -h, h);
+}
+
+// Stage 4: each digit's metacarpal length factor (bone 0: where its knuckle, or the thumb's
+// base, sits on the palm), at `size`. Each step tracks the estimate so far as the reference,
+// then restarts it and, for each digit, the digit's factor one step either way on every frame
+// where the reference's palm faces the camera, and takes the peak of the parabola through each
+// digit's three mean errors (the better end when they are not concave).
+model::HandShape estimateMetacarpals(CandidateScorer& scorer, const model::HandDimensions& size) {
+  model::HandShape shape;
+  for (const float step : kMetacarpalSteps) {
+    std::vector<std::optional<Keypoints21>> reference = scorer.track({size, shape}).keypoints;
+    int facing = 0;
+    for (std::size_t f = 0; f < reference.size(); ++f) {
+      const bool settling = static_cast<int>(f) < scorer.settleFrames();
+      if (reference[f] && (settling || !palmFacesCamera(*reference[f]))) reference[f].reset();
+      if (reference[f]) ++facing;
+    }
+    if (facing < kMinPalmFacingFrames) break;
+    std::vector<CandidateHand> hands = {{size, shape}};
+    for (std::size_t d = 0; d < 5; ++d)
+      for (const float offset : {-step, step}) {
+        hands.push_back({size, shape});
+        hands.back().shape.boneLength[d][0] += offset;
+      }
+    const std::vector<CandidateFrames> tracked = scorer.restart(hands, reference);
+    // Mean error over the frames every candidate tracked.
+    std::vector<double> sums(hands.size(), 0.0);
+    for (std::size_t f = 0; f < reference.size(); ++f) {
+      bool all = true;
+      for (const CandidateFrames& c : tracked) all = all && c.errors[f] >= 0.0f;
+      if (!all) continue;
+      for (std::size_t i = 0; i < tracked.size(); ++i)
+        sums[i] += static_cast<double>(tracked[i].errors[f]);
+    }
+    // Scores: higher is better.
+    const auto score = [&sums](std::size_t i) { return -static_cast<float>(sums[i]); };
+    model::HandShape next = shape;
+    for (std::size_t d = 0; d < 5; ++d) {
+      const float below = score(1 + 2 * d), centre = score(0), above = score(2 + 2 * d);
+      float offset = parabolaPeak(0.0f, step, below, centre, above);
+      if (below - 2.0f * centre + above >= 0.0f) {
+        const float best = std::max({below, centre, above});
+        offset = best == centre ? 0.0f : best == below ? -step : step;
+      }
+      next.boneLength[d][0] += offset;
+    }
+    shape = next;
+  }
+  for (auto& digit : shape.boneLength) digit[0] = 1.0f + kMetacarpalShrink * (digit[0] - 1.0f);
+  return shape;
 }
 
 // Index of the best score (the first on ties, for determinism).
@@ -249,6 +376,8 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
     e.dimensions = {length * l.factor, width * w.factor};
     e.fitScore = std::max({scale.score, w.score, l.score});
   }
+  // 4. Each digit's metacarpal at that size.
+  if (options.metacarpals) e.shape = estimateMetacarpals(scorer, e.dimensions);
   e.framesUsed = static_cast<int>(frames.size());
   e.candidates = scorer.count();
   return e;

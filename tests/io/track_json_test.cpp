@@ -60,10 +60,10 @@ TEST(TrackJson, HasTheDocumentedFields) {
   EXPECT_FALSE(j.contains("hand_size"));  // only when the writer is told the size
 }
 
-TEST(TrackJson, EstimatedHandSizeHasItsSourceFramesAndFit) {
+TEST(TrackJson, EstimatedHandSizeHasItsSourceFramesFitAndMetacarpals) {
   const auto hand = model::makeDefaultHand();
   JsonOptions o;
-  o.handSize = HandSizeRecord{{0.17f, 0.078f}, true, 30, 0.99f};
+  o.handSize = HandSizeRecord{{0.17f, 0.078f}, true, 30, 0.99f, {1.05f, 0.95f, 1.0f, 1.0f, 0.9f}};
   const auto j = nlohmann::json::parse(trackResultToJson(sampleResult(hand, 0, true), hand, o));
   ASSERT_TRUE(j.contains("hand_size"));
   EXPECT_NEAR(j["hand_size"]["length"].get<float>(), 0.17f, 1e-6f);
@@ -71,6 +71,7 @@ TEST(TrackJson, EstimatedHandSizeHasItsSourceFramesAndFit) {
   EXPECT_EQ(j["hand_size"]["source"], "estimated");
   EXPECT_EQ(j["hand_size"]["frames"], 30);
   EXPECT_NEAR(j["hand_size"]["fit"].get<float>(), 0.99f, 1e-6f);
+  EXPECT_EQ(j["hand_size"]["metacarpals"], nlohmann::json::parse("[1.05, 0.95, 1, 1, 0.9]"));
   EXPECT_EQ(j["hands"].size(), 1u);
 }
 
@@ -144,6 +145,10 @@ TEST(TrackRead, BadNumbersAreErrorsNamingLineAndField) {
        "hand_size.length: \"x\" is not in [0.05, 0.6] m"},
       {R"({"frame":0,"hand_size":{"length":0.19,"width":1e-30},"hands":[]})",
        "hand_size.width: 1e-30 is not in [0.025, 0.26] m"},
+      {R"({"frame":0,"hand_size":{"length":0.19,"width":0.08,"metacarpals":[1,1,1,1]},"hands":[]})",
+       "hand_size.metacarpals: not an array of 5 numbers"},
+      {R"({"frame":0,"hand_size":{"length":0.19,"width":0.08,"metacarpals":[1,1,9,1,1]},"hands":[]})",
+       "hand_size.metacarpals[2]: 9 is not in [0.5, 2]"},
       {R"({"frame":0,"hands":[{"side":"right","tracked":false,"candidates":[{"simulation":"normal","error":0.1,"bodies":[)" +
            [&] {
              std::string bodies;
@@ -162,7 +167,7 @@ TEST(TrackRead, BadNumbersAreErrorsNamingLineAndField) {
   }
   // What the writer writes still reads back, hand size included.
   JsonOptions o;
-  o.handSize = HandSizeRecord{{0.17f, 0.078f}, true, 30, 0.99f};
+  o.handSize = HandSizeRecord{{0.17f, 0.078f}, true, 30, 0.99f, {1.05f, 0.95f, 1.0f, 1.0f, 0.9f}};
   std::ofstream(dir / "good.jsonl")
       << trackResultToJson(sampleResult(hand, 5, true), hand, o) << "\n";
   const auto good = readTrackJsonl(dir / "good.jsonl", hand);
@@ -171,6 +176,8 @@ TEST(TrackRead, BadNumbersAreErrorsNamingLineAndField) {
   ASSERT_TRUE(good->front().handSize.has_value());
   EXPECT_EQ(good->front().handSize->frames, 30);
   EXPECT_NEAR(good->front().handSize->dimensions.length, 0.17f, 1e-6f);
+  EXPECT_EQ(good->front().handSize->metacarpals, o.handSize->metacarpals);
+  EXPECT_EQ(good->front().handSize->shape().boneLength[4][0], 0.9f);
 }
 
 }  // namespace

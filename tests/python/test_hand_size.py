@@ -40,14 +40,18 @@ def test_estimate_matches_command(clip, auto_tracked):
     printed, lines = auto_tracked
     estimate = dynahand.estimate_hand_size(dynahand.open_sequence(clip))  # its camera and fps
     assert as_printed(estimate) == printed
-    assert estimate.frames_used == FRAMES and estimate.candidates == 13
+    # 13 for the size, 24 for the metacarpals (the palm faces this camera)
+    assert estimate.frames_used == FRAMES and estimate.candidates == 13 + 24
     record = json.loads(lines[0])["hand_size"]
     assert record["source"] == "estimated" and record["frames"] == FRAMES
     g6 = lambda v: format(float(v), ".6g")
     assert [g6(estimate.length), g6(estimate.width), g6(estimate.fit_score)] == [
         g6(record["length"]), g6(record["width"]), g6(record["fit"])]
+    assert [g6(f) for f in estimate.metacarpals] == [g6(f) for f in record["metacarpals"]]
+    assert all(0.85 <= f <= 1.15 for f in estimate.metacarpals)
     d = estimate.to_dict()
-    assert d["length"] == estimate.length and d["candidates"] == 13
+    assert d["length"] == estimate.length and d["candidates"] == estimate.candidates
+    assert d["metacarpals"] == list(estimate.metacarpals)
     assert repr(estimate).startswith("HandSize(length=0.")
 
 
@@ -87,7 +91,7 @@ def test_start_keypoints_and_a_given_length_match_command(clip, tmp_path):
     estimate = dynahand.estimate_hand_size(seq, start_keypoints=start, frames_used=10,
                                            length=0.2)
     assert as_printed(estimate) == printed_estimate(stdout)
-    assert estimate.length == np.float32(0.2) and estimate.candidates == 7
+    assert estimate.length == np.float32(0.2) and estimate.candidates == 7 + 24
     tracker = dynahand.Tracker(seq, hand_size=estimate, detector=False)
     assert tracker.hand_size_estimate.width == estimate.width
     tracker.initialize(start)  # as --init gt

@@ -192,7 +192,8 @@ track::HandSizeEstimate estimateHandSizePy(const py::object& frames, const py::o
                                            const py::object& startKeypoints, int framesUsed,
                                            int threads, std::optional<float> length,
                                            std::optional<float> width, int hands, bool perFrame,
-                                           double depthScale, std::optional<double> fps) {
+                                           double depthScale, std::optional<double> fps,
+                                           bool metacarpals) {
   if (camera.is_none() && !py::hasattr(frames, "camera"))
     throw py::value_error(
         "camera: needed unless frames is a Sequence or SyntheticClip (which carry theirs)");
@@ -218,6 +219,7 @@ track::HandSizeEstimate estimateHandSizePy(const py::object& frames, const py::o
   options.threads = threads;
   options.length = length;
   options.width = width;
+  options.metacarpals = metacarpals;
   return estimateSize(frames, spec.intrinsics, rate, scale, start, framesUsed, options);
 }
 
@@ -608,6 +610,7 @@ void bindTracker(py::module_& m) {
         py::arg("frames_used") = kDefaultSizeFrames, py::arg("threads") = 1,
         py::arg("length") = py::none(), py::arg("width") = py::none(), py::arg("hands") = 1,
         py::arg("per_frame") = false, py::arg("depth_scale") = 0.001, py::arg("fps") = py::none(),
+        py::arg("metacarpals") = true,
         "Estimates the built-in hand's size from the first frames_used (10..600) frames, as "
         "`dynahand track --hand-size auto --hand-size-frames N` does: candidate sizes are each "
         "tracked over the frames and scored by how well they explain the data. frames: a "
@@ -617,7 +620,9 @@ void bindTracker(py::module_& m) {
         "SyntheticClip). start_keypoints: the first frame's (21, 3) keypoints, m (as --init "
         "gt; then call Tracker.initialize with them too), else each candidate acquires the "
         "hand itself (needs more than 6 frames). length or width: a known one, kept (--hand-"
-        "length / --hand-width). hands, per_frame: the tracker's settings. threads: candidates "
+        "length / --hand-width). metacarpals: also each digit's metacarpal length (False: the "
+        "size alone, as --hand-size-only). hands, per_frame: the tracker's settings. threads: "
+        "candidates "
         "in parallel (the result does not depend on it). Returns a HandSize; runs without the "
         "GIL. ValueError for bad arguments or too few frames, OSError for an unreadable frame.");
 }

@@ -179,9 +179,11 @@ def estimate_hand_size(
     per_frame: bool = False,
     depth_scale: float = 0.001,
     fps: Optional[float] = None,
+    metacarpals: bool = True,
 ) -> HandSize:
     """The built-in hand's size from the first frames_used (10..600) frames, as
-    `dynahand track --hand-size auto` estimates it. camera defaults to the frames' own;
+    `dynahand track --hand-size auto` estimates it, and each digit's metacarpal length
+    (metacarpals=False: the size alone, as --hand-size-only). camera defaults to the frames' own;
     start_keypoints as --init gt; a given length or width is kept. Frame i is at i / fps s;
     bare arrays at depth_scale. Reads no further than frames_used items. ValueError for bad
     arguments or too few frames (more than 6 without start_keypoints), OSError for a frame

@@ -92,6 +92,10 @@ def test_start_keypoints_and_a_given_length_match_command(clip, tmp_path):
                                            length=0.2)
     assert as_printed(estimate) == printed_estimate(stdout)
     assert estimate.length == np.float32(0.2) and estimate.candidates == 7 + 24
+    size_only = dynahand.estimate_hand_size(seq, start_keypoints=start, frames_used=10,
+                                            length=0.2, metacarpals=False)
+    assert size_only.candidates == 7 and size_only.metacarpals == (1.0,) * 5
+    assert size_only.width == estimate.width
     tracker = dynahand.Tracker(seq, hand_size=estimate, detector=False)
     assert tracker.hand_size_estimate.width == estimate.width
     tracker.initialize(start)  # as --init gt

@@ -34,6 +34,8 @@ struct BenchOptions {
   bool noDetector = false;             // every item without the learned detector (an ablation)
   float keypointsFromTruthMm = -1.0f;  // >= 0: ground-truth keypoints with this noise, mm
   std::string trueShape;               // empty: the default hand; else which factors it takes
+  std::string handSize = "given";      // or "auto": each item's hand estimated
+  bool handSizeOnly = false;           // with auto: the size alone
   std::string rows;                    // only the items whose row label contains this (empty: all)
   bool items = false;                  // one line per item after each table
   // --suite soak
@@ -204,6 +206,14 @@ std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const B
     for (eval::SuiteItem& item : items) item.truthKeypointsNoiseM = 0.001f * o.keypointsFromTruthMm;
   if (!o.trueShape.empty())
     for (eval::SuiteItem& item : items) item.trueShape = kTrueShapeParts.at(o.trueShape);
+  if (o.handSize == "auto") {
+    if (!o.trueShape.empty()) throw UsageError("--hand-size auto does not go with --true-shape");
+    for (eval::SuiteItem& item : items)
+      item.handEstimate =
+          o.handSizeOnly ? eval::HandEstimate::Size : eval::HandEstimate::Metacarpals;
+  } else if (o.handSizeOnly) {
+    throw UsageError("--hand-size-only goes with --hand-size auto");
+  }
   return items;
 }
 
@@ -347,6 +357,13 @@ const CommandRegistration kBenchCommand{Command{
                      "knuckles and the thumb base sit), the phalanges, or the thicknesses "
                      "alone; what a model fitted to the user's hand would give")
           ->check(CLI::IsMember(kTrueShapeParts));
+      sub.add_option("--hand-size", o->handSize,
+                     "given (the default hand at the rendered hand's size) or auto: each item "
+                     "tracked with the hand `dynahand track --hand-size auto` estimates from its "
+                     "first 30 frames (size and metacarpals)")
+          ->check(CLI::IsMember({"given", "auto"}));
+      sub.add_flag("--hand-size-only", o->handSizeOnly,
+                   "with --hand-size auto: the size alone, the default proportions");
       sub.add_option("--rows", o->rows,
                      "only the items of the rows whose name contains TEXT (e.g. 'held objects', "
                      "'tof / head'); with --suite all, each suite must have such rows");
@@ -390,6 +407,8 @@ const CommandRegistration kBenchCommand{Command{
         if (o->keypointsFromTruthMm >= 0.0f)
           line += fmt::format(" --keypoints-from-truth {}", o->keypointsFromTruthMm);
         if (!o->trueShape.empty()) line += " --true-shape " + o->trueShape;
+        if (o->handSize == "auto") line += " --hand-size auto";
+        if (o->handSizeOnly) line += " --hand-size-only";
         if (!o->rows.empty()) line += " --rows '" + o->rows + "'";
         if (o->items) line += " --items";
         if (o->minutes > 0.0) line += fmt::format(" --minutes {}", o->minutes);

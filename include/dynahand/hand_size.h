@@ -41,9 +41,14 @@ namespace dynahand::track {
 /// How estimateHandSize searches.
 struct HandSizeOptions {
   TrackerSettings tracker;  ///< settings of the candidate trackers (candidates are not kept)
-  /// Frames at the start each candidate leaves out of its score when it acquires the hand by
-  /// itself (no start keypoints): acquisition may take a few frames, and a candidate that is
-  /// slow to acquire is not a worse size. With start keypoints every frame counts.
+  /// Without start keypoints: the default hand's tracker, with the learned detector (unless
+  /// tracker.detector is off), runs over the first acquisitionFrames frames, and the candidates
+  /// start from the keypoints it reports on the first of them where it has the hand with a
+  /// detection in use; they are scored from that frame on. Found in none of them: each
+  /// candidate acquires the hand by itself (the paper's canonical starts: an open hand facing
+  /// the camera) and leaves these frames out of its score, since acquisition may take a few
+  /// frames and a candidate slow to acquire is not a worse size. With start keypoints every
+  /// frame counts.
   int acquisitionFrames = 6;
   int threads = 1;  ///< candidate trackers run in parallel; the result does not depend on it
   std::optional<float> length;  ///< m: a known length, kept (only the width is estimated)
@@ -70,8 +75,9 @@ struct HandSizeEstimate {
 
 /// Estimates the hand size from `frames` (the start of a sequence, e.g. 30 frames; without
 /// start keypoints more than acquisitionFrames). start: the first frame's 21 keypoints (each
-/// candidate is fitted to them under its joint limits), or none to let each candidate acquire the
-/// hand by itself. Errors for bad intrinsics or too few frames.
+/// candidate is fitted to them under its joint limits), or none: the start then comes from the
+/// learned detector (HandSizeOptions::acquisitionFrames). Errors for bad intrinsics or too few
+/// frames.
 Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
                                           const Intrinsics& intrinsics,
                                           const std::optional<Keypoints21>& start,

@@ -13,6 +13,7 @@
 
 #include <time.h>
 
+#include "dynahand/hand_size.h"
 #include "dynahand/model_fit.h"
 #include "dynahand/synth.h"
 
@@ -491,14 +492,26 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   settings.keepCandidates = false;  // no pictures here
   settings.cloud.segmentation.sensorMinRangeM = seq->profile().minRange;
   const model::ArticulatedModel& handModel = seq->model(0);
-  const model::ArticulatedModel shapedModel =
+  const model::Side side = handModel.metadata().handedness == model::Handedness::Left
+                               ? model::Side::Left
+                               : model::Side::Right;
+  model::ArticulatedModel shapedModel =
       item.trueShape == TrueShape::None
           ? handModel
-          : model::makeDefaultHand(so.hand,
-                                   handModel.metadata().handedness == model::Handedness::Left
-                                       ? model::Side::Left
-                                       : model::Side::Right,
-                                   trackerShape(so.proportions, item.trueShape));
+          : model::makeDefaultHand(so.hand, side, trackerShape(so.proportions, item.trueShape));
+  if (item.handEstimate != HandEstimate::None) {
+    std::vector<DepthFrame> head;
+    for (int f = 0; f < std::min(item.frames, kHandEstimateFrames); ++f)
+      head.push_back(seq->frame(f).depth);
+    track::HandSizeOptions options;
+    options.tracker = settings;
+    options.metacarpals = item.handEstimate == HandEstimate::Metacarpals;
+    const std::optional<Keypoints21> start =
+        item.autoInit ? std::nullopt : std::optional<Keypoints21>(seq->frame(0).hands[0].keypoints);
+    auto estimate = track::estimateHandSize(head, seq->intrinsics(), start, options);
+    if (!estimate) return Error{"hand estimate: " + estimate.message()};
+    shapedModel = model::makeDefaultHand(estimate->dimensions, side, estimate->shape);
+  }
   auto tracker = track::Tracker::create(shapedModel, seq->intrinsics(), settings);
   if (!tracker) return Error{tracker.message()};
   SuiteItemResult result;
@@ -510,7 +523,13 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
     const synth::SyntheticFrame& frame = seq->frame(f);
     result.misfitKeypoints.predicted.push_back(
         fittedToTruth(handModel, misfitFitter, frame.hands[0].pose, frame.hands[0].keypoints));
-    if (f == 0 && !item.autoInit) (*tracker)->initialize(frame.hands[0].pose);
+    if (f == 0 && !item.autoInit) {
+      if (item.handEstimate == HandEstimate::None) {
+        (*tracker)->initialize(frame.hands[0].pose);
+      } else if (Status s = (*tracker)->initializeFromKeypoints(frame.hands[0].keypoints); !s) {
+        return Error{"hand estimate: " + s.message()};  // another model: fitted, as --init gt
+      }
+    }
     if (item.truthKeypointsNoiseM >= 0.0f)
       (*tracker)->setKeypoints(
           noisyTruth(frame.hands[0].keypoints, item.truthKeypointsNoiseM, noise));

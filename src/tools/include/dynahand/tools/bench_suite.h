@@ -48,6 +48,14 @@ enum class TrueShape {
   Thickness,    ///< the finger and palm thickness factors alone
 };
 
+/// Whether the tracker's hand is estimated from the item's first frames, as `dynahand track
+/// --hand-size auto` does it (track::estimateHandSize).
+enum class HandEstimate {
+  None,         ///< the default hand at the rendered hand's size, as `--hand-length` gives it
+  Size,         ///< the size estimated (`--hand-size auto --hand-size-only`)
+  Metacarpals,  ///< the size and each digit's metacarpal estimated (`--hand-size auto`)
+};
+
 /// One benchmark item: a clip synthesised on one sensor profile and hand, then tracked.
 struct SuiteItem {
   std::string variant = "all";  ///< "all", "no <strategy>" or "normal only"
@@ -93,7 +101,14 @@ struct SuiteItem {
   /// is given (model::makeDefaultHand with a model::HandShape): what a model shaped like the
   /// hand would give. None: the default hand, as a user's tracker has.
   TrueShape trueShape = TrueShape::None;
+  /// The tracker's hand estimated from the first kHandEstimateFrames frames (with the first
+  /// frame's keypoints on a `gt` item, acquired by each candidate on an `auto` one) instead of
+  /// given; not with trueShape.
+  HandEstimate handEstimate = HandEstimate::None;
 };
+
+/// Frames SuiteItem::handEstimate estimates from (`dynahand track --hand-size-frames` default).
+inline constexpr int kHandEstimateFrames = 30;
 
 /// The tracker's model shaped like the rendered hand, from these of its factors.
 model::HandShape trackerShape(const synth::HandProportions& proportions, TrueShape part);

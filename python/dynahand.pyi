@@ -113,7 +113,8 @@ class HandSize:
         more for the metacarpals)."""
     @property
     def metacarpals(self) -> tuple[float, float, float, float, float]:
-        """Each digit's metacarpal length factor, thumb to pinky (1: the built-in hand's)."""
+        """Each digit's metacarpal length factor, thumb to pinky (1: the built-in hand's; all 1
+        when no frame showed the palm to the camera)."""
     def to_dict(self) -> dict: ...
 
 class Tracker:

@@ -95,7 +95,7 @@ def shapes(a, run, keypoint_error):
             size_only = keypoint_error(run(track + ['--hand-size-only']))
             out = run(track)
             m = re.search(r'hand shape estimate: metacarpals \(thumb..pinky\) ([\d. ]+)', out)
-            estimated = [float(v) for v in m.group(1).split()]
+            estimated = [float(v) for v in m.group(1).split()] if m else [1.0] * 5
             error = rms([e - t for e, t in zip(estimated, truth)])
             default = rms([1 - t for t in truth])
             shaped = keypoint_error(out)

@@ -208,12 +208,16 @@ int runRender(const RenderOptions& o) {
   model::ArticulatedModel right = handModel(o.hand);
   auto frames = io::readTrackJsonl(o.poses, right);
   if (!frames) throw UsageError(frames.message());
-  // The built-in hand at the size the poses were tracked with (given or estimated, written
-  // by track), unless a model or a size is given here.
+  // The built-in hand at the size and metacarpals the poses were tracked with (given or
+  // estimated, written by track), unless a model is given here; a size given here replaces the
+  // recorded one.
   const auto& trackedSize = frames->front().handSize;
-  if (trackedSize && o.hand.modelFile.empty() && !o.hand.lengthGiven() && !o.hand.widthGiven())
-    right =
-        model::makeDefaultHand(trackedSize->dimensions, model::Side::Right, trackedSize->shape());
+  if (trackedSize && o.hand.modelFile.empty()) {
+    model::HandDimensions size = trackedSize->dimensions;
+    if (o.hand.lengthGiven()) size.length = o.hand.length;
+    if (o.hand.widthGiven()) size.width = o.hand.width;
+    right = model::makeDefaultHand(size, model::Side::Right, trackedSize->shape());
+  }
   const model::ArticulatedModel left = model::mirrorModel(right);
 
   std::vector<const io::TrackedFrame*> chosen;
@@ -298,8 +302,9 @@ const CommandRegistration kRenderCommand{Command{
       sub.add_flag("!--no-candidates", o->candidates, "leave out the losing simulations");
       sub.footer(
           "The losing simulations are drawn when the poses were tracked with --candidates.\n"
-          "The hand is the built-in one at the size track recorded in the poses (given or\n"
-          "--hand-size auto) unless --model, --hand-length or --hand-width says otherwise.\n"
+          "The hand is the built-in one at the size and metacarpals track recorded in the poses\n"
+          "(given or --hand-size auto) unless --model, --hand-length or --hand-width says\n"
+          "otherwise (a size given here keeps the recorded metacarpals).\n"
           "Examples:\n"
           "  dynahand track clip/ --candidates --out poses.jsonl\n"
           "  dynahand render poses.jsonl clip/ --out frames/\n"

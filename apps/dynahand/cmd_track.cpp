@@ -199,11 +199,17 @@ std::optional<io::HandSizeRecord> sizeHand(const TrackOptions& o, FrameInput& in
       static_cast<double>(estimate->dimensions.length),
       static_cast<double>(estimate->dimensions.width), estimate->framesUsed, estimate->candidates,
       static_cast<double>(estimate->fitScore), seconds);
-  std::printf(
-      "hand shape estimate: metacarpals (thumb..pinky) %.3f %.3f %.3f %.3f %.3f\n",
-      static_cast<double>(record.metacarpals[0]), static_cast<double>(record.metacarpals[1]),
-      static_cast<double>(record.metacarpals[2]), static_cast<double>(record.metacarpals[3]),
-      static_cast<double>(record.metacarpals[4]));
+  if (!hs.metacarpals) {
+    std::printf("hand shape: the built-in proportions (--hand-size-only)\n");
+  } else if (estimate->shape.identity()) {
+    std::printf("hand shape: the built-in proportions (too few frames show the palm)\n");
+  } else {
+    std::printf(
+        "hand shape estimate: metacarpals (thumb..pinky) %.3f %.3f %.3f %.3f %.3f\n",
+        static_cast<double>(record.metacarpals[0]), static_cast<double>(record.metacarpals[1]),
+        static_cast<double>(record.metacarpals[2]), static_cast<double>(record.metacarpals[3]),
+        static_cast<double>(record.metacarpals[4]));
+  }
   hand = model::makeDefaultHand(estimate->dimensions, model::Side::Right, record.shape());
   return record;
 }
@@ -343,6 +349,8 @@ void printSummary(const TrackOptions& o, const std::optional<io::HandSizeRecord>
 int runTrack(const TrackOptions& o) {
   FrameInput in = openInput(o);
   const SequenceInfo& info = in.info;
+  if (o.sizeOnly && o.handSize != "auto")
+    throw UsageError("--hand-size-only goes with --hand-size auto");
   if (o.handSize == "auto" && !o.hand.modelFile.empty())
     throw UsageError("--hand-size auto sizes the built-in hand; it does not go with --model");
   std::optional<model::ArticulatedModel> hand = handModel(o.hand);
@@ -392,8 +400,8 @@ const CommandRegistration kTrackCommand{Command{
                      "estimate the built-in hand's size from the first --hand-size-frames frames "
                      "(13 candidate models tracked over them; a given --hand-length or "
                      "--hand-width is kept) and, from the frames that show the palm, each "
-                     "digit's metacarpal length (24 more), then track with it; the size and the "
-                     "metacarpals go into the output")
+                     "digit's metacarpal length (12 more per step, two steps), then track with "
+                     "it; the size and the metacarpals go into the output")
           ->check(CLI::IsMember({"given", "auto"}));
       sub.add_flag("--hand-size-only", o->sizeOnly,
                    "with --hand-size auto: the size alone, the built-in hand's metacarpals");

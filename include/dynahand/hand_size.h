@@ -22,8 +22,9 @@
 ///      hands a few percent apart drift apart by chance), and only on frames where the palm
 ///      faces the camera: seen from behind the metric prefers long metacarpals whatever the
 ///      hand, so from a head-mounted camera the shape stays the default.
-/// 13 candidate trackers for the size, 24 for the shape (HandSizeOptions::metacarpals); they
-/// run in parallel on `threads`. A length or width the caller gives is kept: then step 1
+/// 13 candidate trackers for the size; for the shape (HandSizeOptions::metacarpals) 12 per
+/// step, 1 (the reference) when fewer than 8 frames show the palm; they run in parallel on
+/// `threads`. A length or width the caller gives is kept: then step 1
 /// scales the other alone and steps 2-3 are left out (7 trackers; a length searched so scores
 /// every frame, fists included).
 /// Measured figures: docs/tracker.md, "Hand size".
@@ -60,8 +61,9 @@ struct HandSizeOptions {
 /// The result of estimateHandSize.
 struct HandSizeEstimate {
   model::HandDimensions dimensions;  ///< the estimate, m
-  /// The estimated shape: each digit's metacarpal length factor (boneLength[digit][0]; 1 where
-  /// no palm-facing frames were seen), every other factor 1. The hand to track is
+  /// The estimated shape: each digit's metacarpal length factor (boneLength[digit][0]; all 1
+  /// when too few frames show the palm or HandSizeOptions::metacarpals is off), every other
+  /// factor 1. The hand to track is
   /// model::makeDefaultHand(dimensions, side, shape).
   model::HandShape shape;
   int framesUsed = 0;  ///< frames each candidate tracked

@@ -142,9 +142,9 @@ Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& pa
             throw std::runtime_error("hand_size.metacarpals: not an array of 5 numbers");
           for (std::size_t d = 0; d < record.metacarpals.size(); ++d) {
             const float f = readNumber(factors[d]);
-            if (!(f >= 0.5f && f <= 2.0f))
-              throw std::runtime_error(
-                  fmt::format("hand_size.metacarpals[{}]: {} is not in [0.5, 2]", d, f));
+            if (!(f >= 0.5f && f <= 1.5f))
+              throw std::runtime_error(fmt::format(
+                  "hand_size.metacarpals[{}]: {} is not in [0.5, 1.5]", d, factors[d].dump()));
             record.metacarpals[d] = f;
           }
         }

@@ -23,9 +23,9 @@ constexpr float kHalfStep = 0.05f;
 constexpr float kWidthStep = 0.07f;
 constexpr float kLengthStep = 0.08f;
 // Stage 4: each digit's metacarpal length factor, a coarse then a fine step about the
-// estimate so far; the result keeps this share of its offset from 1 (the scores
-// differ by little more than their noise: moved the whole way, a few hands came out worse
-// than with the default shape).
+// estimate so far; the result keeps this share of its offset from 1: the scores differ by
+// little more than their noise, and the whole offset makes more hands track worse than the
+// default shape does (docs/tracker.md, "Hand size").
 constexpr std::array<float, 2> kMetacarpalSteps = {0.10f, 0.05f};
 constexpr float kMetacarpalShrink = 0.5f;
 // Stage 4 scores only frames where the palm faces the camera: the cosine between the back of
@@ -105,8 +105,8 @@ struct CandidateStart {
 // detector, reports on the first frame where it has the hand tracked with a detection in use,
 // within the first `withinFrames`. The candidates' own acquisition has no detector (their
 // scores must come from the paper's simulations alone) and so finds only an open hand facing
-// the camera; from any other start each candidate took the hand its own way and the sizes
-// came out up to 27 % off.
+// the camera; from any other start each candidate takes the hand its own way, and the sizes
+// come out 15-23 % off (HandSize.EstimatesWithoutStartKeypointsOnCapturedMotion).
 CandidateStart detectedStart(std::span<const DepthFrame> frames, const Intrinsics& intrinsics,
                              const TrackerSettings& settings, int withinFrames) {
   if (!settings.detector.enabled) return {};

@@ -148,7 +148,9 @@ TEST(TrackRead, BadNumbersAreErrorsNamingLineAndField) {
       {R"({"frame":0,"hand_size":{"length":0.19,"width":0.08,"metacarpals":[1,1,1,1]},"hands":[]})",
        "hand_size.metacarpals: not an array of 5 numbers"},
       {R"({"frame":0,"hand_size":{"length":0.19,"width":0.08,"metacarpals":[1,1,9,1,1]},"hands":[]})",
-       "hand_size.metacarpals[2]: 9 is not in [0.5, 2]"},
+       "hand_size.metacarpals[2]: 9 is not in [0.5, 1.5]"},
+      {R"({"frame":0,"hand_size":{"length":0.19,"width":0.08,"metacarpals":[1,1,"x",1,1]},"hands":[]})",
+       "hand_size.metacarpals[2]: \"x\" is not in [0.5, 1.5]"},
       {R"({"frame":0,"hands":[{"side":"right","tracked":false,"candidates":[{"simulation":"normal","error":0.1,"bodies":[)" +
            [&] {
              std::string bodies;

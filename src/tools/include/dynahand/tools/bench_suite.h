@@ -102,8 +102,8 @@ struct SuiteItem {
   /// hand would give. None: the default hand, as a user's tracker has.
   TrueShape trueShape = TrueShape::None;
   /// The tracker's hand estimated from the first kHandEstimateFrames frames (with the first
-  /// frame's keypoints on a `gt` item, acquired by each candidate on an `auto` one) instead of
-  /// given; not with trueShape.
+  /// frame's keypoints on a `gt` item, from the hand the learned detector finds on an `auto`
+  /// one: HandSizeOptions::acquisitionFrames) instead of given; not with trueShape.
   HandEstimate handEstimate = HandEstimate::None;
 };
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <unordered_map>
 
 #include "dynahand/track_io.h"
@@ -43,15 +44,21 @@ int readInt(const json& j, const char* what) {
   if (!fits) throw std::runtime_error(fmt::format("{}: {} is not a whole number", what, j.dump()));
   return j.get<int>();
 }
-// A hand size the default hand can be built at: finite, and within half and twice the sizes
-// the commands accept (length 0.10-0.30 m, width 0.05-0.13 m).
-float readHandDimension(const json& j, const char* what, float lo, float hi) {
+// A finite number in [lo, hi]; else an error naming the field and the value as written. unit:
+// appended to the range in the message ("" for a factor).
+float readNumberIn(const json& j, const std::string& what, float lo, float hi,
+                   const char* unit = "") {
   const float v = readNumber(j);
   if (!(v >= lo && v <= hi)) {
     throw std::runtime_error(
-        fmt::format("hand_size.{}: {} is not in [{}, {}] m", what, j.dump(), lo, hi));
+        fmt::format("{}: {} is not in [{}, {}]{}", what, j.dump(), lo, hi, unit));
   }
   return v;
+}
+// A hand size the default hand can be built at: finite, and within half and twice the sizes
+// the commands accept (length 0.10-0.30 m, width 0.05-0.13 m).
+float readHandDimension(const json& j, const char* what, float lo, float hi) {
+  return readNumberIn(j, fmt::format("hand_size.{}", what), lo, hi, " m");
 }
 
 TrackedHand readHand(const json& h, const model::ArticulatedModel& model,
@@ -140,13 +147,10 @@ Result<std::vector<TrackedFrame>> readTrackJsonl(const std::filesystem::path& pa
           const json& factors = size["metacarpals"];
           if (!factors.is_array() || factors.size() != record.metacarpals.size())
             throw std::runtime_error("hand_size.metacarpals: not an array of 5 numbers");
-          for (std::size_t d = 0; d < record.metacarpals.size(); ++d) {
-            const float f = readNumber(factors[d]);
-            if (!(f >= 0.5f && f <= 1.5f))
-              throw std::runtime_error(fmt::format(
-                  "hand_size.metacarpals[{}]: {} is not in [0.5, 1.5]", d, factors[d].dump()));
-            record.metacarpals[d] = f;
-          }
+          // The synthesiser's widest proportions (--proportion-spread 0.5).
+          for (std::size_t d = 0; d < record.metacarpals.size(); ++d)
+            record.metacarpals[d] =
+                readNumberIn(factors[d], fmt::format("hand_size.metacarpals[{}]", d), 0.5f, 1.5f);
         }
         frame.handSize = record;
       }

@@ -1,7 +1,8 @@
 # cmake -DDYNAHAND=... -DWORK_DIR=... -P HandSizeAuto.cmake
 # dynahand track --hand-size auto: on a small synthetic hand it estimates a size near the
-# truth, logs it, writes it into every JSON line and tracks with it; given sizes win; it
-# does not go with --model; an unknown value is a usage error.
+# truth, logs it, writes it (and the metacarpals) into every JSON line and tracks with it; given
+# sizes win; it does not go with --model; an unknown value, or --hand-size-only without auto, is
+# a usage error.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 execute_process(COMMAND ${DYNAHAND} synth --motion wave --profile tof --frames 12 --hand-length 0.165
@@ -57,3 +58,21 @@ execute_process(COMMAND ${DYNAHAND} track ${WORK_DIR}/clip --hand-size big
 if(NOT rc EQUAL 2 OR NOT err MATCHES "hand-size")
   message(FATAL_ERROR "track --hand-size big: exit ${rc}, stderr: ${err}")
 endif()
+
+# The metacarpals go into the estimated record: five factors.
+file(STRINGS ${WORK_DIR}/auto.jsonl first LIMIT_COUNT 1)
+string(JSON metacarpals LENGTH "${first}" hand_size metacarpals)
+if(NOT metacarpals EQUAL 5)
+  message(FATAL_ERROR "track --hand-size auto wrote ${metacarpals} metacarpal factors, not 5")
+endif()
+
+# --hand-size-only goes with --hand-size auto, in track and bench; bench's auto not with
+# --true-shape (both say which hand the tracker gets).
+foreach(args "track;${WORK_DIR}/clip;--hand-size-only"
+             "bench;--suite;motion;--quick;--hand-size-only"
+             "bench;--suite;motion;--quick;--hand-size;auto;--true-shape;all")
+  execute_process(COMMAND ${DYNAHAND} ${args} RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
+  if(NOT rc EQUAL 2 OR NOT err MATCHES "hand-size")
+    message(FATAL_ERROR "${args}: exit ${rc}, stderr: ${err}")
+  endif()
+endforeach()

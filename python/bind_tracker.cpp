@@ -210,7 +210,8 @@ track::HandSizeEstimate estimateHandSizePy(const py::object& frames, const py::o
     throw py::value_error("depth_scale must be a positive number (metres per unit)");
   if (length) checkLength(*length, "length");
   if (width) checkWidth(*width, "width");
-  if (length && width) throw py::value_error("length and width both given: nothing to estimate");
+  if (length && width && !metacarpals)
+    throw py::value_error("length and width both given and metacarpals=False: nothing to estimate");
   const auto start = keypointsInput(startKeypoints, "start_keypoints");
   track::HandSizeOptions options;
   options.tracker.hands = hands;
@@ -621,7 +622,8 @@ void bindTracker(py::module_& m) {
         "gt; then call Tracker.initialize with them too), else the candidates start from the "
         "hand the learned detector finds in the first 6 frames (needs more than 6 frames). length "
         "or width: a known one, kept (--hand-"
-        "length / --hand-width). metacarpals: also each digit's metacarpal length (False: the "
+        "length / --hand-width; both: the metacarpals alone). metacarpals: also each digit's "
+        "metacarpal length (False: the "
         "size alone, as --hand-size-only). hands, per_frame: the tracker's settings. threads: "
         "candidates "
         "in parallel (the result does not depend on it). Returns a HandSize; runs without the "

@@ -172,8 +172,10 @@ std::optional<io::HandSizeRecord> sizeHand(const TrackOptions& o, FrameInput& in
   std::optional<io::HandSizeRecord> handSize;
   if (o.hand.modelFile.empty()) handSize = io::HandSizeRecord{{o.hand.length, o.hand.width}};
   if (o.handSize != "auto") return handSize;
-  if (o.hand.lengthGiven() && o.hand.widthGiven()) {
-    std::printf("--hand-size auto: --hand-length and --hand-width given, nothing to estimate\n");
+  if (o.hand.lengthGiven() && o.hand.widthGiven() && o.sizeOnly) {
+    std::printf(
+        "--hand-size auto --hand-size-only: --hand-length and --hand-width given, nothing to "
+        "estimate\n");
     return handSize;
   }
   const int count = std::min(o.handSizeFrames, last - first);

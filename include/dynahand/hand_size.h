@@ -52,9 +52,12 @@ struct HandSizeOptions {
   /// frame counts.
   int acquisitionFrames = 6;
   int threads = 1;  ///< candidate trackers run in parallel; the result does not depend on it
-  std::optional<float> length;  ///< m: a known length, kept (only the width is estimated)
-  std::optional<float> width;   ///< m: a known width, kept (only the length is estimated)
-  /// Also estimate each digit's metacarpal length (step 4); false: the default shape.
+  /// m: a known length, kept (only the width is estimated; with a width too, only the
+  /// metacarpals). The detected start's hand has it, the width in the default proportion.
+  std::optional<float> length;
+  std::optional<float> width;  ///< m: a known width, kept (as length)
+  /// Also estimate each digit's metacarpal length (step 4); false: the default shape (then
+  /// length and width both given leave nothing to estimate: an error).
   bool metacarpals = true;
 };
 

@@ -108,11 +108,12 @@ struct CandidateStart {
 // the camera; from any other start each candidate takes the hand its own way, and the sizes
 // come out 15-23 % off (HandSize.EstimatesWithoutStartKeypointsOnCapturedMotion).
 CandidateStart detectedStart(std::span<const DepthFrame> frames, const Intrinsics& intrinsics,
-                             const TrackerSettings& settings, int withinFrames) {
+                             const TrackerSettings& settings, const model::HandDimensions& size,
+                             int withinFrames) {
   if (!settings.detector.enabled) return {};
   TrackerSettings s = settings;
   s.keepCandidates = false;
-  auto tracker = Tracker::create(model::makeDefaultHand(), intrinsics, s);
+  auto tracker = Tracker::create(model::makeDefaultHand(size), intrinsics, s);
   if (!tracker) return {};
   const int count = std::min(withinFrames, static_cast<int>(frames.size()) - 1);
   for (int f = 0; f < count; ++f) {
@@ -370,13 +371,27 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
     return Error{"hand size estimate: " + std::to_string(frames.size()) +
                  " frames; needs more than " + std::to_string(leftOut) +
                  (start ? "" : " (the frames a candidate may take to acquire the hand)")};
-  if (options.length && options.width)
-    return Error{"hand size estimate: length and width both given, nothing to estimate"};
+  if (options.length && options.width && !options.metacarpals)
+    return Error{
+        "hand size estimate: length and width both given and the metacarpals not asked for, "
+        "nothing to estimate"};
+  // The hand the detected start is found with: what is given of it, the rest in the default
+  // proportion.
+  model::HandDimensions startSize{kDefaultLength, kDefaultWidth};
+  if (options.length)
+    startSize = {*options.length, kDefaultWidth * *options.length / kDefaultLength};
+  if (options.width) {
+    startSize.width = *options.width;
+    if (!options.length) startSize.length = kDefaultLength * *options.width / kDefaultWidth;
+  }
   CandidateStart from{start, 0};
-  if (!start) from = detectedStart(frames, intrinsics, options.tracker, leftOut);
+  if (!start) from = detectedStart(frames, intrinsics, options.tracker, startSize, leftOut);
   CandidateScorer scorer(frames, intrinsics, from, options);
   HandSizeEstimate e;
-  if (options.length) {  // the width alone, in the default proportion to start from
+  if (options.length && options.width) {  // the size known: the metacarpals alone
+    e.dimensions = startSize;
+    e.fitScore = scorer.score({startSize}).front();
+  } else if (options.length) {  // the width alone, in the default proportion to start from
     const float length = *options.length, width = kDefaultWidth * length / kDefaultLength;
     const SearchResult r = searchFactor(scorer, [&](float f) {
       return model::HandDimensions{length, width * f};

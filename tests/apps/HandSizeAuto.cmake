@@ -1,7 +1,7 @@
 # cmake -DDYNAHAND=... -DWORK_DIR=... -P HandSizeAuto.cmake
 # dynahand track --hand-size auto: on a small synthetic hand it estimates a size near the
 # truth, logs it, writes it (and the metacarpals) into every JSON line and tracks with it; given
-# sizes win; it does not go with --model; an unknown value, or --hand-size-only without auto, is
+# sizes win (both given: the metacarpals alone are estimated); it does not go with --model; an unknown value, or --hand-size-only without auto, is
 # a usage error.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
@@ -37,15 +37,27 @@ if(NOT source STREQUAL "estimated" OR length LESS 0.157 OR length GREATER 0.173 
   message(FATAL_ERROR "track --hand-size auto wrote hand_size ${length} x ${width} (${source})")
 endif()
 
-# Both dimensions given: nothing to estimate, the given size is used and recorded.
+# Both dimensions given: they are kept and the metacarpals alone are estimated; with
+# --hand-size-only too there is nothing to estimate, and the given size is used and recorded.
 execute_process(COMMAND ${DYNAHAND} track ${WORK_DIR}/clip --init gt --hand-size auto
-                        --hand-length 0.17 --hand-width 0.08 --out ${WORK_DIR}/given.jsonl
+                        --hand-size-frames 10 --hand-length 0.17 --hand-width 0.08
+                        --out ${WORK_DIR}/given_shape.jsonl
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_QUIET)
+read_hand_size(${WORK_DIR}/given_shape.jsonl length width source)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "hand size estimate: length 0\\.1700 m  width 0\\.0800 m"
+   OR NOT source STREQUAL "estimated" OR NOT length EQUAL 0.17 OR NOT width EQUAL 0.08)
+  message(FATAL_ERROR "track --hand-size auto with a given size: exit ${rc}, ${length} x ${width} "
+                      "(${source}), stdout: ${out}")
+endif()
+execute_process(COMMAND ${DYNAHAND} track ${WORK_DIR}/clip --init gt --hand-size auto
+                        --hand-size-only --hand-length 0.17 --hand-width 0.08
+                        --out ${WORK_DIR}/given.jsonl
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_QUIET)
 read_hand_size(${WORK_DIR}/given.jsonl length width source)
 if(NOT rc EQUAL 0 OR NOT out MATCHES "nothing to estimate" OR NOT source STREQUAL "given"
    OR NOT length EQUAL 0.17 OR NOT width EQUAL 0.08)
-  message(FATAL_ERROR "track --hand-size auto with a given size: exit ${rc}, ${length} x ${width} "
-                      "(${source}), stdout: ${out}")
+  message(FATAL_ERROR "track --hand-size auto --hand-size-only with a given size: exit ${rc}, "
+                      "${length} x ${width} (${source}), stdout: ${out}")
 endif()
 
 execute_process(COMMAND ${DYNAHAND} track ${WORK_DIR}/clip --hand-size auto --model ${WORK_DIR}/m.json

@@ -165,7 +165,8 @@ def test_estimate_misuse():
         (dict(fps=0.0), "fps must be > 0"),
         (dict(length=0.5), "length must be in \\[0.10, 0.30\\] m"),
         (dict(width=0.01), "width must be in \\[0.05, 0.15\\] m"),
-        (dict(length=0.19, width=0.085), "length and width both given: nothing to estimate"),
+        (dict(length=0.19, width=0.085, metacarpals=False),
+         "length and width both given and metacarpals=False: nothing to estimate"),
         (dict(start_keypoints=np.zeros((20, 3))), "start_keypoints: keypoints must have shape"),
     ]
     for kwargs, message in bad:

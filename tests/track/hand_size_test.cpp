@@ -158,6 +158,24 @@ TEST(HandSize, KeepsAGivenLength) {
   EXPECT_EQ(e->candidates, 7 + 24);
 }
 
+// Length and width both given: they are kept and the metacarpals alone are estimated (one
+// candidate for the score, then step 4's 24).
+TEST(HandSize, KeepsAGivenSizeAndEstimatesTheMetacarpals) {
+  const synth::HandProportions truth = synth::randomProportions(3, 0.15f);
+  const Clip clip = makeClip({}, false, truth, 30);
+  HandSizeOptions o;
+  o.length = 0.19f;
+  o.width = 0.085f;
+  auto e = estimateHandSize(clip.frames, clip.intrinsics, clip.start, o);
+  ASSERT_TRUE(e) << e.message();
+  EXPECT_EQ(e->dimensions.length, 0.19f);
+  EXPECT_EQ(e->dimensions.width, 0.085f);
+  EXPECT_EQ(e->candidates, 1 + 24);
+  EXPECT_GT(e->fitScore, 0.9f);
+  EXPECT_LT(metacarpalDifference(e->shape, truth),
+            metacarpalDifference(model::HandShape{}, truth) - 0.01f);
+}
+
 TEST(HandSize, RefusesTooFewFramesAndNothingToEstimate) {
   const Clip clip = makeClip({});
   // Without start keypoints the first acquisitionFrames (6) frames are not scored.
@@ -169,6 +187,7 @@ TEST(HandSize, RefusesTooFewFramesAndNothingToEstimate) {
   HandSizeOptions o;
   o.length = 0.19f;
   o.width = 0.085f;
+  o.metacarpals = false;
   EXPECT_FALSE(estimateHandSize(clip.frames, clip.intrinsics, clip.start, o));
   EXPECT_FALSE(estimateHandSize(clip.frames, Intrinsics{}, clip.start));
 }

@@ -400,8 +400,9 @@ const CommandRegistration kTrackCommand{Command{
       sub.add_option("--hand-size", o->handSize,
                      "given (--hand-length / --hand-width, default 0.19 / 0.085), or auto: "
                      "estimate the built-in hand's size from the first --hand-size-frames frames "
-                     "(13 candidate models tracked over them; a given --hand-length or "
-                     "--hand-width is kept) and, from the frames that show the palm, each "
+                     "(13 candidate models tracked over them; seen from behind, the learned "
+                     "detector's palm; a given --hand-length or --hand-width is kept, both "
+                     "given: only the metacarpals) and, from the frames that show the palm, each "
                      "digit's metacarpal length (12 more per step, two steps), then track with "
                      "it; the size and the metacarpals go into the output")
           ->check(CLI::IsMember({"given", "auto"}));

@@ -22,11 +22,16 @@
 ///      hands a few percent apart drift apart by chance), and only on frames where the palm
 ///      faces the camera: seen from behind the metric prefers long metacarpals whatever the
 ///      hand, so from a head-mounted camera the shape stays the default.
+/// Seen from behind (the learned detector's keypoints show the palm facing the camera on fewer
+/// than 8 of the frames it ran on, at least 8), steps 1-3 are replaced: the size is the default
+/// proportions scaled to the detector's palm (median wrist-to-knuckle length), since there the
+/// data explain a hand's back about as well at any size near the truth (the search ran 6-11 %
+/// long from a head-mounted camera); 1 candidate tracked for the score.
 /// 13 candidate trackers for the size; for the shape (HandSizeOptions::metacarpals) 12 per
 /// step, 1 (the reference) when fewer than 8 frames show the palm; they run in parallel on
 /// `threads`. A length or width the caller gives is kept: then step 1
 /// scales the other alone and steps 2-3 are left out (7 trackers; a length searched so scores
-/// every frame, fists included).
+/// every frame, fists included); both given, only step 4.
 /// Measured figures: docs/tracker.md, "Hand size".
 #pragma once
 

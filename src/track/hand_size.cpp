@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "dynahand/model_pose.h"
 #include "track/worker_pool.h"
 
 namespace dynahand::track {
@@ -33,6 +34,15 @@ constexpr float kMetacarpalShrink = 0.5f;
 // (a head-mounted camera) the error metric prefers long metacarpals whatever the hand.
 constexpr float kPalmFacingCosine = 0.3f;
 constexpr int kMinPalmFacingFrames = 8;  // fewer: the shape stays the default
+// Seen from behind as well (the detector's palm faces the camera in fewer than
+// kMinPalmFacingFrames frames), the error metric says little of the size: a hand's back
+// explains the data at any size near the truth, and the estimate ran 6-11 % long from a
+// head-mounted camera (each dimension alone with the other given: -19..+21 %). The size is then
+// the default proportions scaled to the palm the learned detector sees (the median over the
+// frames of its mean wrist-to-knuckle length), within this range, when it ran on at least
+// kMinDetectedFrames frames.
+constexpr std::array<float, 2> kDetectedScaleRange = {0.75f, 1.25f};
+constexpr int kMinDetectedFrames = 8;
 
 // How well one tracked frame's hand explains the data both ways, [0, 1].
 float frameScore(const HandResult& hand) {
@@ -101,27 +111,68 @@ struct CandidateStart {
   int frame = 0;
 };
 
-// Without start keypoints: the keypoints the default hand's tracker, with the learned
-// detector, reports on the first frame where it has the hand tracked with a detection in use,
-// within the first `withinFrames`. The candidates' own acquisition has no detector (their
-// scores must come from the paper's simulations alone) and so finds only an open hand facing
-// the camera; from any other start each candidate takes the hand its own way, and the sizes
-// come out 15-23 % off (HandSize.EstimatesWithoutStartKeypointsOnCapturedMotion).
-CandidateStart detectedStart(std::span<const DepthFrame> frames, const Intrinsics& intrinsics,
-                             const TrackerSettings& settings, const model::HandDimensions& size,
-                             int withinFrames) {
-  if (!settings.detector.enabled) return {};
+// Whether the palm faces the camera in these keypoints (kPalmFacingCosine), of a left or a
+// right hand.
+bool palmFacesCamera(const Keypoints21& k, model::Side side) {
+  if (side == model::Side::Right) return palmFacesCamera(k);
+  Keypoints21 mirrored = k;  // a left hand mirrored across x is a right one
+  for (Vec3& p : mirrored) p.x() = -p.x();
+  return palmFacesCamera(mirrored);
+}
+
+// Mean distance from the wrist to the four finger knuckles, m: the palm's length.
+float palmLength(const Keypoints21& k) {
+  float sum = 0.0f;
+  for (std::size_t knuckle : {5u, 9u, 13u, 17u}) sum += (k[knuckle] - k[0]).norm();
+  return 0.25f * sum;
+}
+
+// The hand as the tracker with the learned detector sees it over the frames (one default-size
+// hand, started from the given keypoints, else acquiring).
+struct DetectedHand {
+  // Without start keypoints, where the candidates start: the keypoints it reports on the first
+  // frame, within the first `withinFrames`, where it has the hand with a detection in use. The
+  // candidates' own acquisition has no detector (their scores must come from the paper's
+  // simulations alone) and so finds only an open hand facing the camera; from any other start
+  // each candidate takes the hand its own way, and the sizes come out 15-23 % off
+  // (HandSize.EstimatesWithoutStartKeypointsOnCapturedMotion).
+  CandidateStart start;
+  std::vector<float> palmLengths;  // the detector's palmLength, m, on every frame it ran
+  int palmFacingFrames = 0;        // of those, frames whose detected palm faces the camera
+};
+
+DetectedHand detectHand(std::span<const DepthFrame> frames, const Intrinsics& intrinsics,
+                        const TrackerSettings& settings, const model::HandDimensions& size,
+                        const std::optional<Keypoints21>& start, int withinFrames) {
+  DetectedHand d;
+  if (!settings.detector.enabled) return d;
   TrackerSettings s = settings;
   s.keepCandidates = false;
   auto tracker = Tracker::create(model::makeDefaultHand(size), intrinsics, s);
-  if (!tracker) return {};
-  const int count = std::min(withinFrames, static_cast<int>(frames.size()) - 1);
-  for (int f = 0; f < count; ++f) {
-    const TrackResult& r = (*tracker)->track(frames[static_cast<std::size_t>(f)]);
-    if (!r.hands.empty() && r.hands.front().tracked && r.hands.front().detected)
-      return {r.hands.front().keypoints21, f};
+  if (!tracker) return d;
+  if (start && !(*tracker)->initializeFromKeypoints(*start)) return d;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const TrackResult& r = (*tracker)->track(frames[f]);
+    if (r.hands.empty()) continue;
+    const HandResult& h = r.hands.front();
+    if (!start && !d.start.keypoints && h.tracked && h.detected &&
+        static_cast<int>(f) < withinFrames)
+      d.start = {h.keypoints21, static_cast<int>(f)};
+    if (!h.detected) continue;
+    d.palmLengths.push_back(palmLength(h.detectorKeypoints21));
+    if (palmFacesCamera(h.detectorKeypoints21, h.side)) ++d.palmFacingFrames;
   }
-  return {};
+  return d;
+}
+
+// The scale of the default hand whose palm is as long as the median detected one.
+float detectedScale(std::vector<float> palmLengths) {
+  const auto middle = palmLengths.begin() + static_cast<std::ptrdiff_t>(palmLengths.size() / 2);
+  std::nth_element(palmLengths.begin(), middle, palmLengths.end());
+  const model::ArticulatedModel hand = model::makeDefaultHand();
+  const float model =
+      palmLength(model::keypoints21(hand, model::forwardKinematics(hand, model::zeroAngles(hand))));
+  return std::clamp(*middle / model, kDetectedScaleRange[0], kDetectedScaleRange[1]);
 }
 
 class CandidateScorer {
@@ -384,13 +435,20 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
     startSize.width = *options.width;
     if (!options.length) startSize.length = kDefaultLength * *options.width / kDefaultWidth;
   }
-  CandidateStart from{start, 0};
-  if (!start) from = detectedStart(frames, intrinsics, options.tracker, startSize, leftOut);
+  const DetectedHand detected =
+      detectHand(frames, intrinsics, options.tracker, startSize, start, leftOut);
+  const CandidateStart from = start ? CandidateStart{start, 0} : detected.start;
   CandidateScorer scorer(frames, intrinsics, from, options);
+  const bool fromBehind = static_cast<int>(detected.palmLengths.size()) >= kMinDetectedFrames &&
+                          detected.palmFacingFrames < kMinPalmFacingFrames;
   HandSizeEstimate e;
   if (options.length && options.width) {  // the size known: the metacarpals alone
     e.dimensions = startSize;
     e.fitScore = scorer.score({startSize}).front();
+  } else if (fromBehind && !options.length && !options.width) {
+    const float scale = detectedScale(detected.palmLengths);
+    e.dimensions = {kDefaultLength * scale, kDefaultWidth * scale};
+    e.fitScore = scorer.score({e.dimensions}).front();
   } else if (options.length) {  // the width alone, in the default proportion to start from
     const float length = *options.length, width = kDefaultWidth * length / kDefaultLength;
     const SearchResult r = searchFactor(scorer, [&](float f) {

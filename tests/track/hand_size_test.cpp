@@ -69,15 +69,22 @@ TEST(HandSize, EstimatesASmallAndALargeHand) {
 // much of it: the score leaves the samples beyond the model's wrist out, else the candidate with
 // the longest forearm covers the most of them and wins.
 // From the head the fingers point away and show less of their length: 10 %.
-TEST(HandSize, EstimatesASmallHandSeenFromTheHead) {
-  const model::HandDimensions truth{0.165f, 0.075f};
-  const Clip clip = makeClip(truth, true);
-  auto e = estimateHandSize(clip.frames, clip.intrinsics, clip.start);
-  ASSERT_TRUE(e) << e.message();
-  EXPECT_NEAR(e->dimensions.length / truth.length, 1.0f, 0.10f) << e->dimensions.length << " m";
-  EXPECT_NEAR(e->dimensions.width / truth.width, 1.0f, 0.10f) << e->dimensions.width << " m";
-  // The back of the hand toward the camera: no frame to judge the metacarpals by.
-  EXPECT_TRUE(e->shape.identity());
+// From a head-mounted camera (the back of the hand toward it) the size is the default
+// proportions scaled to the palm the learned detector sees: the error metric says little of
+// the size there (its estimate ran 6-11 % long). Over 30 frames, as `dynahand track
+// --hand-size auto`; one candidate scored, one tracked for the metacarpals.
+TEST(HandSize, EstimatesHandsSeenFromTheHeadFromTheDetectedPalm) {
+  for (const model::HandDimensions truth :
+       {model::HandDimensions{0.165f, 0.075f}, model::HandDimensions{0.215f, 0.095f}}) {
+    const Clip clip = makeClip(truth, true, {}, 30);
+    auto e = estimateHandSize(clip.frames, clip.intrinsics, clip.start);
+    ASSERT_TRUE(e) << e.message();
+    expectNear(e->dimensions.length, truth.length, "length");
+    expectNear(e->dimensions.width, truth.width, "width");
+    EXPECT_LE(e->candidates, 2);
+    // The back of the hand toward the camera: no frame to judge the metacarpals by.
+    EXPECT_TRUE(e->shape.identity());
+  }
 }
 
 // Root mean square over the five digits of the metacarpal factors' differences.

@@ -320,13 +320,16 @@ TrackTally trackFrames(const TrackOptions& o, FrameInput& in, track::Tracker& tr
 void printSummary(const TrackOptions& o, const std::optional<io::HandSizeRecord>& handSize,
                   int first, const TrackTally& tally, bool hasGroundTruth) {
   if (handSize) {
+    const std::string frames =
+        "from frames " + std::to_string(first) + "-" + std::to_string(first + handSize->frames - 1);
+    // Both dimensions given with --hand-size auto: only the metacarpals were estimated.
+    const bool sizeGiven = o.hand.lengthGiven() && o.hand.widthGiven();
+    const std::string source = !handSize->estimated ? "given"
+                               : sizeGiven          ? "given; metacarpals estimated " + frames
+                                                    : "estimated " + frames;
     std::printf("hand size  length %.4f m  width %.4f m  (%s)\n",
                 static_cast<double>(handSize->dimensions.length),
-                static_cast<double>(handSize->dimensions.width),
-                handSize->estimated ? ("estimated from frames " + std::to_string(first) + "-" +
-                                       std::to_string(first + handSize->frames - 1))
-                                          .c_str()
-                                    : "given");
+                static_cast<double>(handSize->dimensions.width), source.c_str());
   }
   const int done = tally.done;
   std::printf("frames %d  tracked %d (%.1f%%)\n", done, tally.trackedFrames,

@@ -47,14 +47,15 @@ namespace dynahand::track {
 /// How estimateHandSize searches.
 struct HandSizeOptions {
   TrackerSettings tracker;  ///< settings of the candidate trackers (candidates are not kept)
-  /// Without start keypoints: the default hand's tracker, with the learned detector (unless
-  /// tracker.detector is off), runs over the first acquisitionFrames frames, and the candidates
-  /// start from the keypoints it reports on the first of them where it has the hand with a
-  /// detection in use; they are scored from that frame on. Found in none of them: each
-  /// candidate acquires the hand by itself (the paper's canonical starts: an open hand facing
-  /// the camera) and leaves these frames out of its score, since acquisition may take a few
-  /// frames and a candidate slow to acquire is not a worse size. With start keypoints every
-  /// frame counts.
+  /// Without start keypoints: the default hand's tracker (a given length or width, the other in
+  /// the default proportion), with the learned detector (unless tracker.detector is off), runs
+  /// over the frames (only the first acquisitionFrames when a dimension is given), and the
+  /// candidates start from the keypoints it reports on the first of the first acquisitionFrames
+  /// frames where it has the hand with a detection in use; they are scored from that frame on.
+  /// Found in none of them: each candidate acquires the hand by itself (the paper's canonical
+  /// starts: an open hand facing the camera) and leaves these frames out of its score, since
+  /// acquisition may take a few frames and a candidate slow to acquire is not a worse size.
+  /// With start keypoints every frame counts.
   int acquisitionFrames = 6;
   int threads = 1;  ///< candidate trackers run in parallel; the result does not depend on it
   /// m: a known length, kept (only the width is estimated; with a width too, only the

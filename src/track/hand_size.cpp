@@ -40,7 +40,8 @@ constexpr int kMinPalmFacingFrames = 8;  // fewer: the shape stays the default
 // head-mounted camera (each dimension alone with the other given: -19..+21 %). The size is then
 // the default proportions scaled to the palm the learned detector sees (the median over the
 // frames of its mean wrist-to-knuckle length), within this range, when it ran on at least
-// kMinDetectedFrames frames.
+// kMinDetectedFrames frames; with a length or a width given, the other in the default
+// proportion to it.
 constexpr std::array<float, 2> kDetectedScaleRange = {0.75f, 1.25f};
 constexpr int kMinDetectedFrames = 8;
 
@@ -111,15 +112,6 @@ struct CandidateStart {
   int frame = 0;
 };
 
-// Whether the palm faces the camera in these keypoints (kPalmFacingCosine), of a left or a
-// right hand.
-bool palmFacesCamera(const Keypoints21& k, model::Side side) {
-  if (side == model::Side::Right) return palmFacesCamera(k);
-  Keypoints21 mirrored = k;  // a left hand mirrored across x is a right one
-  for (Vec3& p : mirrored) p.x() = -p.x();
-  return palmFacesCamera(mirrored);
-}
-
 // Mean distance from the wrist to the four finger knuckles, m: the palm's length.
 float palmLength(const Keypoints21& k) {
   float sum = 0.0f;
@@ -141,38 +133,45 @@ struct DetectedHand {
   int palmFacingFrames = 0;        // of those, frames whose detected palm faces the camera
 };
 
+// palm: also over every frame for the palm (else only until the start is found).
 DetectedHand detectHand(std::span<const DepthFrame> frames, const Intrinsics& intrinsics,
                         const TrackerSettings& settings, const model::HandDimensions& size,
-                        const std::optional<Keypoints21>& start, int withinFrames) {
+                        const std::optional<Keypoints21>& start, int withinFrames, bool palm) {
   DetectedHand d;
-  if (!settings.detector.enabled) return d;
+  if (!settings.detector.enabled || (start && !palm)) return d;
   TrackerSettings s = settings;
   s.keepCandidates = false;
   auto tracker = Tracker::create(model::makeDefaultHand(size), intrinsics, s);
-  if (!tracker) return d;
+  // Without weights the tracker runs without the detector: nothing to find.
+  if (!tracker || !(*tracker)->settings().detector.enabled) return d;
   if (start && !(*tracker)->initializeFromKeypoints(*start)) return d;
-  for (std::size_t f = 0; f < frames.size(); ++f) {
+  const std::size_t count =
+      palm ? frames.size() : std::min(frames.size(), static_cast<std::size_t>(withinFrames));
+  for (std::size_t f = 0; f < count; ++f) {
     const TrackResult& r = (*tracker)->track(frames[f]);
     if (r.hands.empty()) continue;
     const HandResult& h = r.hands.front();
     if (!start && !d.start.keypoints && h.tracked && h.detected &&
         static_cast<int>(f) < withinFrames)
       d.start = {h.keypoints21, static_cast<int>(f)};
+    if (!palm && d.start.keypoints) break;
     if (!h.detected) continue;
     d.palmLengths.push_back(palmLength(h.detectorKeypoints21));
-    if (palmFacesCamera(h.detectorKeypoints21, h.side)) ++d.palmFacingFrames;
+    if (palmFacesCamera(h.detectorKeypoints21)) ++d.palmFacingFrames;
   }
   return d;
 }
 
 // The scale of the default hand whose palm is as long as the median detected one.
 float detectedScale(std::vector<float> palmLengths) {
-  const auto middle = palmLengths.begin() + static_cast<std::ptrdiff_t>(palmLengths.size() / 2);
-  std::nth_element(palmLengths.begin(), middle, palmLengths.end());
+  std::sort(palmLengths.begin(), palmLengths.end());
+  const std::size_t n = palmLengths.size();
+  const float median =
+      n % 2 == 1 ? palmLengths[n / 2] : 0.5f * (palmLengths[n / 2 - 1] + palmLengths[n / 2]);
   const model::ArticulatedModel hand = model::makeDefaultHand();
   const float model =
       palmLength(model::keypoints21(hand, model::forwardKinematics(hand, model::zeroAngles(hand))));
-  return std::clamp(*middle / model, kDetectedScaleRange[0], kDetectedScaleRange[1]);
+  return std::clamp(median / model, kDetectedScaleRange[0], kDetectedScaleRange[1]);
 }
 
 class CandidateScorer {
@@ -435,8 +434,9 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
     startSize.width = *options.width;
     if (!options.length) startSize.length = kDefaultLength * *options.width / kDefaultWidth;
   }
+  const bool sizeWanted = !options.length || !options.width;
   const DetectedHand detected =
-      detectHand(frames, intrinsics, options.tracker, startSize, start, leftOut);
+      detectHand(frames, intrinsics, options.tracker, startSize, start, leftOut, sizeWanted);
   const CandidateStart from = start ? CandidateStart{start, 0} : detected.start;
   CandidateScorer scorer(frames, intrinsics, from, options);
   const bool fromBehind = static_cast<int>(detected.palmLengths.size()) >= kMinDetectedFrames &&
@@ -445,9 +445,15 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
   if (options.length && options.width) {  // the size known: the metacarpals alone
     e.dimensions = startSize;
     e.fitScore = scorer.score({startSize}).front();
-  } else if (fromBehind && !options.length && !options.width) {
-    const float scale = detectedScale(detected.palmLengths);
-    e.dimensions = {kDefaultLength * scale, kDefaultWidth * scale};
+  } else if (fromBehind) {
+    // One dimension given: the other in the default proportion to it (the one-dimension
+    // searches below are as far off from behind).
+    if (options.length || options.width) {
+      e.dimensions = startSize;
+    } else {
+      const float scale = detectedScale(detected.palmLengths);
+      e.dimensions = {kDefaultLength * scale, kDefaultWidth * scale};
+    }
     e.fitScore = scorer.score({e.dimensions}).front();
   } else if (options.length) {  // the width alone, in the default proportion to start from
     const float length = *options.length, width = kDefaultWidth * length / kDefaultLength;

@@ -1,8 +1,8 @@
 # cmake -DDYNAHAND=... -DWORK_DIR=... -P HandSizeAuto.cmake
 # dynahand track --hand-size auto: on a small synthetic hand it estimates a size near the
 # truth, logs it, writes it (and the metacarpals) into every JSON line and tracks with it; given
-# sizes win (both given: the metacarpals alone are estimated); it does not go with --model; an unknown value, or --hand-size-only without auto, is
-# a usage error.
+# sizes win (both given: the metacarpals alone are estimated); it does not go with --model; an
+# unknown value, or --hand-size-only without auto, is a usage error.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 execute_process(COMMAND ${DYNAHAND} synth --motion wave --profile tof --frames 12 --hand-length 0.165
@@ -44,8 +44,13 @@ execute_process(COMMAND ${DYNAHAND} track ${WORK_DIR}/clip --init gt --hand-size
                         --out ${WORK_DIR}/given_shape.jsonl
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_QUIET)
 read_hand_size(${WORK_DIR}/given_shape.jsonl length width source)
+file(STRINGS ${WORK_DIR}/given_shape.jsonl first_line LIMIT_COUNT 1)
+string(JSON metacarpal_count ERROR_VARIABLE no_metacarpals LENGTH "${first_line}" hand_size metacarpals)
 if(NOT rc EQUAL 0 OR NOT out MATCHES "hand size estimate: length 0\\.1700 m  width 0\\.0800 m"
-   OR NOT source STREQUAL "estimated" OR NOT length EQUAL 0.17 OR NOT width EQUAL 0.08)
+   OR NOT out MATCHES "hand shape estimate: metacarpals"
+   OR NOT out MATCHES "given; metacarpals estimated from frames 0-9"
+   OR NOT source STREQUAL "estimated" OR NOT length EQUAL 0.17 OR NOT width EQUAL 0.08
+   OR no_metacarpals OR NOT metacarpal_count EQUAL 5)
   message(FATAL_ERROR "track --hand-size auto with a given size: exit ${rc}, ${length} x ${width} "
                       "(${source}), stdout: ${out}")
 endif()

@@ -96,6 +96,11 @@ def test_start_keypoints_and_a_given_length_match_command(clip, tmp_path):
                                             length=0.2, metacarpals=False)
     assert size_only.candidates == 7 and size_only.metacarpals == (1.0,) * 5
     assert size_only.width == estimate.width
+    # Both given: kept, the metacarpals alone estimated (one scored candidate, then step 4).
+    shape = dynahand.estimate_hand_size(seq, start_keypoints=start, frames_used=10, length=0.2,
+                                        width=0.09)
+    assert (shape.length, shape.width) == (np.float32(0.2), np.float32(0.09))
+    assert shape.candidates == 1 + 24 and len(shape.metacarpals) == 5
     tracker = dynahand.Tracker(seq, hand_size=estimate, detector=False)
     assert tracker.hand_size_estimate.width == estimate.width
     tracker.initialize(start)  # as --init gt

@@ -504,7 +504,8 @@ void bindTracker(py::module_& m) {
                     "Frames each candidate model tracked.")
       .def_readonly("candidates", &track::HandSizeEstimate::candidates,
                     "Candidate models tracked (13 for the size, 7 with a length or width "
-                    "given; up to 24 more for the metacarpals).")
+                    "given, 1 with both or seen from behind; up to 24 more for the "
+                    "metacarpals).")
       .def_property_readonly(
           "metacarpals",
           [](const track::HandSizeEstimate& e) {

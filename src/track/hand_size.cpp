@@ -425,49 +425,47 @@ Result<HandSizeEstimate> estimateHandSize(std::span<const DepthFrame> frames,
     return Error{
         "hand size estimate: length and width both given and the metacarpals not asked for, "
         "nothing to estimate"};
-  // The hand the detected start is found with: what is given of it, the rest in the default
-  // proportion.
-  model::HandDimensions startSize{kDefaultLength, kDefaultWidth};
-  if (options.length)
-    startSize = {*options.length, kDefaultWidth * *options.length / kDefaultLength};
-  if (options.width) {
-    startSize.width = *options.width;
-    if (!options.length) startSize.length = kDefaultLength * *options.width / kDefaultWidth;
+  // What is given of the hand, the rest in the default proportion: the hand the detected start
+  // is found with, and where the one-dimension searches start.
+  model::HandDimensions given{kDefaultLength, kDefaultWidth};
+  if (options.length && options.width) {
+    given = {*options.length, *options.width};
+  } else if (options.length) {
+    given = {*options.length, kDefaultWidth * *options.length / kDefaultLength};
+  } else if (options.width) {
+    given = {kDefaultLength * *options.width / kDefaultWidth, *options.width};
   }
+  const bool anyGiven = options.length || options.width;
   const bool sizeWanted = !options.length || !options.width;
   const DetectedHand detected =
-      detectHand(frames, intrinsics, options.tracker, startSize, start, leftOut, sizeWanted);
+      detectHand(frames, intrinsics, options.tracker, given, start, leftOut, sizeWanted);
   const CandidateStart from = start ? CandidateStart{start, 0} : detected.start;
   CandidateScorer scorer(frames, intrinsics, from, options);
   const bool fromBehind = static_cast<int>(detected.palmLengths.size()) >= kMinDetectedFrames &&
                           detected.palmFacingFrames < kMinPalmFacingFrames;
   HandSizeEstimate e;
-  if (options.length && options.width) {  // the size known: the metacarpals alone
-    e.dimensions = startSize;
-    e.fitScore = scorer.score({startSize}).front();
-  } else if (fromBehind) {
-    // One dimension given: the other in the default proportion to it (the one-dimension
-    // searches below are as far off from behind).
-    if (options.length || options.width) {
-      e.dimensions = startSize;
+  if (!sizeWanted || fromBehind) {
+    // Not searched: the size known (the metacarpals alone), or seen from behind, where the
+    // searches below are far off: a given dimension with the other in the default proportion
+    // to it, else the detected palm's scale.
+    if (anyGiven) {
+      e.dimensions = given;
     } else {
       const float scale = detectedScale(detected.palmLengths);
       e.dimensions = {kDefaultLength * scale, kDefaultWidth * scale};
     }
     e.fitScore = scorer.score({e.dimensions}).front();
-  } else if (options.length) {  // the width alone, in the default proportion to start from
-    const float length = *options.length, width = kDefaultWidth * length / kDefaultLength;
+  } else if (options.length) {  // the width alone, from the default proportion
     const SearchResult r = searchFactor(scorer, [&](float f) {
-      return model::HandDimensions{length, width * f};
+      return model::HandDimensions{given.length, given.width * f};
     });
-    e.dimensions = {length, width * r.factor};
+    e.dimensions = {given.length, given.width * r.factor};
     e.fitScore = r.score;
   } else if (options.width) {  // the length alone
-    const float width = *options.width, length = kDefaultLength * width / kDefaultWidth;
     const SearchResult r = searchFactor(scorer, [&](float f) {
-      return model::HandDimensions{length * f, width};
+      return model::HandDimensions{given.length * f, given.width};
     });
-    e.dimensions = {length * r.factor, width};
+    e.dimensions = {given.length * r.factor, given.width};
     e.fitScore = r.score;
   } else {
     // 1. Uniform scale of the default proportions.

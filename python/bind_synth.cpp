@@ -78,7 +78,7 @@ std::unique_ptr<PySynthClip> makeSynth(const std::string& motion, int frames,
                                        const std::string& background, bool table,
                                        const py::object& handSize, float proportionSpread,
                                        std::uint64_t proportionSeed, const std::string& heldObject,
-                                       float heldObjectSize) {
+                                       float heldObjectSize, std::pair<float, float> viewShift) {
   synth::SynthOptions o;  // `dynahand synth`'s defaults unless given
   o.clip = motion;
   o.frameCount = frames;
@@ -116,6 +116,7 @@ std::unique_ptr<PySynthClip> makeSynth(const std::string& motion, int frames,
     throw py::value_error("held_object must be 'none', 'ball', 'cylinder' or 'box' (got '" +
                           heldObject + "')");
   o.scene.heldObjectSize = heldObjectSize;
+  o.scene.viewShift = Vec2(viewShift.first, viewShift.second);
   if (!handSize.is_none()) {
     try {
       const auto pair = handSize.cast<std::pair<float, float>>();
@@ -179,9 +180,12 @@ void bindSynth(py::module_& m) {
         py::arg("table") = false, py::arg("hand_size") = py::none(),
         py::arg("proportion_spread") = 0.0f, py::arg("proportion_seed") = 1,
         py::arg("held_object") = "none", py::arg("held_object_size") = 0.025f,
+        py::arg("view_shift") = std::pair<float, float>(0.0f, 0.0f),
         "A synthetic clip in memory, as `dynahand synth --motion M --frames N --profile P "
-        "--placement desk|head --seed S --object O --object-size R ...` renders it. motion: a "
-        "clip name (clips()); held_object: none, ball, cylinder or box against the palm; "
+        "--placement desk|head --seed S --object O --object-size R --view-shift DX DY ...` "
+        "renders it. motion: a clip name (clips()); held_object: none, ball, cylinder or box "
+        "against the palm; view_shift: (dx, dy) pixels the scene moves in the image (a hand "
+        "near a border goes on out of view); "
         "profile: ideal, tof, structured-light or active-stereo. ValueError for an unknown "
         "clip or profile or a value out of range.");
   m.def(

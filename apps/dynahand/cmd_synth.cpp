@@ -72,6 +72,7 @@ struct SynthFlags {
   std::string placement = "desk", background = "none", heldObject = "none";
   float proportionSpread = 0.0f;
   std::uint64_t proportionSeed = 1;
+  std::vector<float> viewShift;  // pixels: x, y
 };
 
 // The command line of `dynahand synth` into `flags`.
@@ -130,6 +131,10 @@ void addSynthOptions(CLI::App& sub, const std::shared_ptr<SynthFlags>& flags) {
   sub.add_option("--hand-distance", o.scene.handDistance,
                  "camera to hand distance, m (0 = auto per profile)")
       ->capture_default_str();
+  sub.add_option("--view-shift", flags->viewShift,
+                 "move the scene in the image by DX DY pixels (the principal point moves): a hand "
+                 "near a border goes on out of view")
+      ->expected(2);
   sub.add_option("--hand-length", o.hand.length, "hand length, wrist crease to middle fingertip, m")
       ->capture_default_str()
       ->check(CLI::Range(0.10, 0.30));
@@ -158,6 +163,7 @@ void addSynthOptions(CLI::App& sub, const std::shared_ptr<SynthFlags>& flags) {
       "  dynahand synth --motion pinch --proportion-spread 0.15 --proportion-seed 7 --out "
       "/tmp/pinch\n"
       "  dynahand synth --motion grasp-cylinder --object cylinder --out /tmp/grasp\n"
+      "  dynahand synth --motion wave --placement head --view-shift 0 -100 --out /tmp/edge\n"
       "  dynahand synth --contact-sheet docs/images/synth_contact_sheet.png\n"
       "Output: camera.json, depth/*.png, groundtruth.jsonl, poses.jsonl, synth.json "
       "(docs/synth.md).");
@@ -184,6 +190,8 @@ int runSynth(SynthFlags& flags) {
       {"box", synth::HeldObject::Box}};
   opts.scene.heldObject = objects.at(flags.heldObject);
   opts.proportions = synth::randomProportions(flags.proportionSeed, flags.proportionSpread);
+  if (flags.viewShift.size() == 2)
+    opts.scene.viewShift = Vec2(flags.viewShift[0], flags.viewShift[1]);
   if (!flags.contactSheet.empty()) {
     synth::Scene scene = opts.scene;
     if (flags.background == "none") scene.background = synth::Background::Wall;

@@ -13,6 +13,7 @@
 /// count fixed; 16 directions lose at most 1 - cos(11.25 deg) = 2% of the hull's width).
 #pragma once
 
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -40,13 +41,27 @@ struct BoundaryPlaneConfig {
   float omitHalfAngle = 0.6f;
 };
 
+/// Where the image ends, in the normalised image plane (x/z, y/z): the hull's vertices on an
+/// edge are where the camera's view ends, not where the hand does, so the planes that rest on
+/// them (outward direction toward that edge) are left out and the hand may go on out of view.
+/// The default (infinite) bounds leave out nothing.
+struct ViewBounds {
+  Vec2 min = Vec2::Constant(-std::numeric_limits<float>::infinity());  ///< left, top edge
+  Vec2 max = Vec2::Constant(std::numeric_limits<float>::infinity());   ///< right, bottom edge
+  /// A hull vertex within this of an edge lies on it (normalised image units: the sample
+  /// spacing and pixel footprint, 1 pixel = 1 / f).
+  float margin = 0.0f;
+};
+
 /// Reusable builder: scratch buffers grow to the largest input seen, then no allocation.
 class BoundaryPlaneBuilder {
  public:
   /// Planes for points given in the normalised image plane (x/z, y/z). armDirection is
-  /// a direction in that plane (zero = none: keep all planes). Replaces `out`.
+  /// a direction in that plane (zero = none: keep all planes). `view`: planes resting on the
+  /// image's edges are left out (ViewBounds). Replaces `out`.
   void build(std::span<const Vec2> normalisedPoints, const BoundaryPlaneConfig& config,
-             const Vec2& armDirection, std::vector<BoundaryPlane>& out);
+             const Vec2& armDirection, std::vector<BoundaryPlane>& out,
+             const ViewBounds& view = {});
   /// Same for 3D points (m, camera frame, z > 0; others are skipped).
   void buildFromPoints(std::span<const Vec3> points, const BoundaryPlaneConfig& config,
                        const Vec2& armDirection, std::vector<BoundaryPlane>& out);
@@ -56,6 +71,8 @@ class BoundaryPlaneBuilder {
   std::span<const Vec2> hull() const { return hull_; }
 
  private:
+  bool restsOnViewEdge(const Vec2& d, float support, const ViewBounds& view) const;
+
   std::vector<Vec2> sorted_;
   std::vector<Vec2> hull_;
   std::vector<Vec2> projected_;

@@ -93,6 +93,10 @@ struct Scene {
   /// m: the ball's and the cylinder's radius, half the box's thickness (its cross-section is
   /// square), in [0.01, 0.06]. The object touches the palm's skin on its palmar side.
   float heldObjectSize = 0.025f;
+  /// Pixels (x right, y down): the camera's principal point moved by this, so the whole scene
+  /// lands this far from where it would (a hand at the view's centre moved toward a border,
+  /// part of it out of view). Each component within the image's width / height.
+  Vec2 viewShift = Vec2::Zero();
 };
 
 // ---- Sequences ----

@@ -35,9 +35,26 @@ void convexHull(std::span<const Vec2> sorted, std::vector<Vec2>& hull) {
 
 }  // namespace
 
+bool BoundaryPlaneBuilder::restsOnViewEdge(const Vec2& d, float support,
+                                           const ViewBounds& view) const {
+  // The vertices the supporting line touches (within the margin): on an edge that d faces
+  // (beyond rounding: a direction along the edge is the hull's side, seen whole), the hull is
+  // cut by the image there.
+  constexpr float kFacing = 1e-3f;
+  for (const Vec2& h : hull_) {
+    if (d.dot(h) < support - view.margin) continue;
+    if ((d.x() < -kFacing && h.x() <= view.min.x() + view.margin) ||
+        (d.x() > kFacing && h.x() >= view.max.x() - view.margin) ||
+        (d.y() < -kFacing && h.y() <= view.min.y() + view.margin) ||
+        (d.y() > kFacing && h.y() >= view.max.y() - view.margin))
+      return true;
+  }
+  return false;
+}
+
 void BoundaryPlaneBuilder::build(std::span<const Vec2> normalisedPoints,
                                  const BoundaryPlaneConfig& config, const Vec2& armDirection,
-                                 std::vector<BoundaryPlane>& out) {
+                                 std::vector<BoundaryPlane>& out, const ViewBounds& view) {
   assert(config.planeCount >= 3 && "a cone needs at least three planes");
   out.clear();
   hull_.clear();
@@ -60,6 +77,7 @@ void BoundaryPlaneBuilder::build(std::span<const Vec2> normalisedPoints,
     if (omitArmSide && d.dot(arm) >= omitCos) continue;
     float support = -std::numeric_limits<float>::infinity();
     for (const Vec2& h : hull_) support = std::max(support, d.dot(h));
+    if (restsOnViewEdge(d, support, view)) continue;
     support += config.margin;
     BoundaryPlane plane;
     plane.imageDirection = d;

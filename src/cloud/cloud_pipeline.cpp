@@ -949,7 +949,14 @@ void CloudPipeline::Impl::buildPlanes(const Scan& scan, CloudFrame& out) {
       (config.planeMarginPixels + static_cast<float>(scan.blockOffset)) / std::min(k.fx, k.fy);
   const Vec2 armInPlane(out.segment.armDirectionImage.x() * scan.invFx,
                         out.segment.armDirectionImage.y() * scan.invFy);
-  planeBuilder.build(hullPoints, planeConfig, armInPlane, out.planes);
+  // The image's edges through its outermost pixel centres; a hull vertex within a sample
+  // block of one lies on it.
+  ViewBounds view;
+  view.min = Vec2(-k.cx * scan.invFx, -k.cy * scan.invFy);
+  view.max = Vec2((static_cast<float>(k.width - 1) - k.cx) * scan.invFx,
+                  (static_cast<float>(k.height - 1) - k.cy) * scan.invFy);
+  view.margin = static_cast<float>(out.filterStride + 1) / std::min(k.fx, k.fy);
+  planeBuilder.build(hullPoints, planeConfig, armInPlane, out.planes, view);
 }
 
 Status CloudPipeline::Impl::run(const DepthFrame& frame, CloudFrame& out) {

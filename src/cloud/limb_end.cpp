@@ -15,6 +15,10 @@ enum CellState : std::uint8_t { kUnseen = 0, kSurface = 1, kAttachment = 2 };
 // comes too near to be measured. Silhouette edges (the surface turning away) and level holes
 // are not cuts.
 constexpr float kNearCutSlope = 0.5f;
+// Separate attachments whose mean image rows lie farther apart than this share of the ball's
+// radius (at the seed's depth) are a limb attached at the lower one and a hand that goes on
+// out of view at the upper one (keepBodySide).
+constexpr float kBodySideSeparation = 0.25f;
 
 // Whether neighbouring samples at depths za and zb (m), `spacing` apart per m of depth, lie on
 // one surface. One rule both ways (symmetric), so the surface explored is the graph searched.
@@ -135,8 +139,84 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
   }
   if (!attached) return -1;
 
+  keepBodySide(grid, k, centre.z(), kBodySideSeparation * limbRadiusM);
   stepFromAttachments(grid, k, rule);
   return farthestCell(grid.width);
+}
+
+void LimbEndFinder::keepBodySide(const DepthGrid& grid, const Intrinsics& k, float depthM,
+                                 float separationM) {
+  // Connected groups of attachment cells (8-neighbours), each with its mean row.
+  const int w = grid.width;
+  const int h = grid.height;
+  groupOf_.assign(queue_.size(), -1);
+  groupRows_.clear();
+  groupCounts_.clear();
+  stack_.clear();
+  const auto indexOf = [&](int c) {
+    const auto it = std::lower_bound(sortedAttachments_.begin(), sortedAttachments_.end(), c);
+    return it != sortedAttachments_.end() && *it == c
+               ? static_cast<int>(
+                     sortedIndex_[static_cast<std::size_t>(it - sortedAttachments_.begin())])
+               : -1;
+  };
+  sortedAttachments_.clear();
+  sortedIndex_.clear();
+  for (std::size_t a = 0; a < queue_.size(); ++a)
+    sortedAttachments_.push_back((queue_[a] >> 16) * w + (queue_[a] & 0xffff));
+  sortedIndex_.resize(queue_.size());
+  for (std::size_t a = 0; a < queue_.size(); ++a) sortedIndex_[a] = static_cast<std::int32_t>(a);
+  std::sort(sortedIndex_.begin(), sortedIndex_.end(), [&](std::int32_t x, std::int32_t y) {
+    return sortedAttachments_[static_cast<std::size_t>(x)] <
+           sortedAttachments_[static_cast<std::size_t>(y)];
+  });
+  std::sort(sortedAttachments_.begin(), sortedAttachments_.end());
+  for (std::size_t a = 0; a < queue_.size(); ++a) {
+    if (groupOf_[a] >= 0) continue;
+    const int group = static_cast<int>(groupRows_.size());
+    groupRows_.push_back(0.0f);
+    groupCounts_.push_back(0);
+    groupOf_[a] = group;
+    stack_.push_back(static_cast<std::int32_t>(a));
+    while (!stack_.empty()) {
+      const auto b = static_cast<std::size_t>(stack_.back());
+      stack_.pop_back();
+      const int i = queue_[b] & 0xffff;
+      const int j = queue_[b] >> 16;
+      groupRows_[static_cast<std::size_t>(group)] += static_cast<float>(j);
+      ++groupCounts_[static_cast<std::size_t>(group)];
+      for (int dj = -1; dj <= 1; ++dj) {
+        for (int di = -1; di <= 1; ++di) {
+          const int ni = i + di, nj = j + dj;
+          if ((di == 0 && dj == 0) || ni < 0 || nj < 0 || ni >= w || nj >= h) continue;
+          const int n = indexOf(nj * w + ni);
+          if (n < 0 || groupOf_[static_cast<std::size_t>(n)] >= 0) continue;
+          groupOf_[static_cast<std::size_t>(n)] = group;
+          stack_.push_back(n);
+        }
+      }
+    }
+  }
+  if (groupRows_.size() < 2) return;
+  float lowest = -1.0f;
+  for (std::size_t g = 0; g < groupRows_.size(); ++g) {
+    groupRows_[g] /= static_cast<float>(groupCounts_[g]);
+    lowest = std::max(lowest, groupRows_[g]);
+  }
+  // Rows (cells) apart that make two attachments a limb and a hand out of view.
+  const float apart = separationM * k.fy / (depthM * static_cast<float>(grid.step));
+  std::size_t kept = 0;
+  for (std::size_t a = 0; a < queue_.size(); ++a) {
+    const auto g = static_cast<std::size_t>(groupOf_[a]);
+    const int c = (queue_[a] >> 16) * w + (queue_[a] & 0xffff);
+    if (groupRows_[g] < lowest - apart) {
+      state_[static_cast<std::size_t>(c)] = kSurface;
+      steps_[static_cast<std::size_t>(c)] = -1;
+    } else {
+      queue_[kept++] = queue_[a];
+    }
+  }
+  queue_.resize(kept);
 }
 
 void LimbEndFinder::stepFromAttachments(const DepthGrid& grid, const Intrinsics& k,

@@ -59,6 +59,8 @@ Status validate(const SynthOptions& o) {
   if (!(o.scene.handDistance == 0.0f ||
         (o.scene.handDistance >= 0.1f && o.scene.handDistance <= 3.0f)))
     return bad("hand distance must be 0 (auto) or in [0.1, 3] m");
+  if (!std::isfinite(o.scene.viewShift.x()) || !std::isfinite(o.scene.viewShift.y()))
+    return bad("view shift must be finite");
   if (o.poseStart < 0) return bad("the first pose played must not be negative");
   const auto factorOk = [](float f) { return f >= 0.5f && f <= 1.5f; };
   bool proportionsOk = factorOk(o.proportions.palmThickness);
@@ -223,6 +225,12 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
   if (Status s = validate(options); !s) return s.error();
   Result<SensorProfile> profile = findSensorProfile(options.profile);
   if (!profile) return profile.error();
+  Intrinsics& k = profile->intrinsics;
+  if (std::fabs(options.scene.viewShift.x()) > static_cast<float>(k.width) ||
+      std::fabs(options.scene.viewShift.y()) > static_cast<float>(k.height))
+    return Error{"view shift must be within the image's width and height"};
+  k.cx += options.scene.viewShift.x();
+  k.cy += options.scene.viewShift.y();
   auto state = std::make_unique<State>(options, *profile);
 
   int handCount = 1;

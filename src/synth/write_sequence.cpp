@@ -12,7 +12,7 @@
 namespace dynahand::synth {
 namespace {
 
-constexpr int kSynthFormatVersion = 3;
+constexpr int kSynthFormatVersion = 4;
 
 const char* placementName(CameraPlacement p) {
   return p == CameraPlacement::DeskFacing ? "desk" : "head";
@@ -62,7 +62,8 @@ std::string describe(const SyntheticSequence& seq, int writtenFrames) {
                 {"table_below_hand", o.scene.tableBelowHand},
                 {"hand_distance_m", o.scene.handDistance},
                 {"held_object", heldObjectName(o.scene.heldObject)},
-                {"held_object_size_m", o.scene.heldObjectSize}};
+                {"held_object_size_m", o.scene.heldObjectSize},
+                {"view_shift_px", {o.scene.viewShift.x(), o.scene.viewShift.y()}}};
   const HandProportions& p = o.proportions;
   // Element by element (GCC's -Wnull-dereference misfires on nlohmann's std::array path).
   nlohmann::ordered_json bones = nlohmann::ordered_json::array();

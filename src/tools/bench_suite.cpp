@@ -40,15 +40,22 @@ constexpr float kTableDropM = 0.08f;
 constexpr synth::HeldObject kHeldObjects[] = {synth::HeldObject::Ball, synth::HeldObject::Cylinder,
                                               synth::HeldObject::Box};
 
+// The image-border rows: the scene moved in the image (pixels, x right, y down) so that the
+// palm's centre, at about (160, 125) of the 320 x 240 view, lands about 30 pixels from the top,
+// the left or the right border, and the fingers or one side of the hand go on out of view;
+// the clips take these in turn.
+constexpr float kBorderShifts[][2] = {{0.0f, -95.0f}, {-130.0f, 0.0f}, {130.0f, 0.0f}};
+
 // A joint this far (m) or more behind the table or wall its pixel shows is hidden by it.
 constexpr float kHiddenBehindSceneM = 0.01f;
 
 // The joints of the last frame rendered that the scene does not hide: whose pixel shows
 // neither the held object nor the background (a table, a wall) in front of them. A synthetic
 // hand moved by captured motion can pass through a table; what it hides there is not scored.
+// outsideTheImage: whether joints outside the image count as hidden too.
 std::array<bool, 21> notHiddenByTheScene(const synth::SyntheticSequence& seq,
                                          const synth::SyntheticFrame& frame,
-                                         const Keypoints21& keypoints) {
+                                         const Keypoints21& keypoints, bool outsideTheImage) {
   const Intrinsics& k = seq.intrinsics();
   std::array<bool, 21> scored;
   scored.fill(true);
@@ -57,7 +64,10 @@ std::array<bool, 21> notHiddenByTheScene(const synth::SyntheticSequence& seq,
     const Vec2 uv = k.project(keypoints[j]);
     const auto u = static_cast<int>(std::lround(uv.x()));
     const auto v = static_cast<int>(std::lround(uv.y()));
-    if (u < 0 || v < 0 || u >= k.width || v >= k.height) continue;
+    if (u < 0 || v < 0 || u >= k.width || v >= k.height) {
+      scored[j] = !outsideTheImage;
+      continue;
+    }
     const std::size_t pixel = static_cast<std::size_t>(v) * k.width + u;
     const synth::PixelLabel label = seq.labels()[pixel];
     const float z = frame.depth.metres(u, v);
@@ -296,6 +306,24 @@ void addHeldObjectClipItems(const MotionPlan& plan, MotionSuite& suite) {
   }
 }
 
+// A hand reaching past the image border (tof, gt start): every clip with the scene moved
+// toward the top, the left or the right border in turn (kBorderShifts).
+void addImageBorderClipItems(const MotionPlan& plan, MotionSuite& suite) {
+  for (synth::CameraPlacement placement : plan.placements) {
+    for (std::size_t c = 0; c < plan.clipNames.size(); ++c) {
+      SuiteItem item = motionItem(plan,
+                                  fmt::format("image border: clips x{} / tof / {} / gt",
+                                              kMotionSpeed, placementName(placement)),
+                                  plan.clipNames[c], "tof", placement, false, 3300 + c);
+      item.frames = plan.clipFrames;
+      item.speed = kMotionSpeed;
+      const auto* shift = kBorderShifts[c % std::size(kBorderShifts)];
+      item.viewShift = Vec2(shift[0], shift[1]);
+      suite.items.push_back(std::move(item));
+    }
+  }
+}
+
 // The animbank poses for the medium hand and where they jump (cuts between takes).
 struct Animbank {
   std::shared_ptr<const std::vector<model::JointAngles>> poses;
@@ -403,6 +431,7 @@ Result<MotionSuite> motionSuite(const MotionSuiteOptions& options) {
   const MotionPlan plan = motionPlan(options);
   addClipItems(plan, suite);
   addHeldObjectClipItems(plan, suite);
+  addImageBorderClipItems(plan, suite);
   const std::filesystem::path file = options.data / "intel" / "animbank.pose";
   std::error_code ec;
   if (options.data.empty() || !std::filesystem::is_regular_file(file, ec)) {
@@ -481,6 +510,7 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
   so.speed = item.speed;
   so.hand = item.size.dimensions;
   so.scene.heldObject = item.heldObject;
+  so.scene.viewShift = item.viewShift;
   so.scene.table = item.tableDropM > 0.0f;
   if (so.scene.table) {
     so.scene.tableDrop = item.tableDropM;
@@ -547,8 +577,10 @@ Result<SuiteItemResult> runSuiteItem(const SuiteItem& item) {
                                                    : std::nullopt);
     result.detectorKeypoints.predicted.push_back(
         h.detected ? std::optional<Keypoints21>(h.detectorKeypoints21) : std::nullopt);
-    if (item.heldObject != synth::HeldObject::None || item.tableDropM > 0.0f)
-      result.keypoints.scored.push_back(notHiddenByTheScene(*seq, frame, frame.hands[0].keypoints));
+    const bool shifted = item.viewShift != Vec2::Zero();
+    if (item.heldObject != synth::HeldObject::None || item.tableDropM > 0.0f || shifted)
+      result.keypoints.scored.push_back(
+          notHiddenByTheScene(*seq, frame, frame.hands[0].keypoints, shifted));
   }
   auto metrics = computeKeypointMetrics(result.keypoints);
   if (!metrics) return Error{metrics.message()};

@@ -104,6 +104,34 @@ TEST(BoundaryPlanes, ArmSideIsOmitted) {
   }
 }
 
+// A hull cut by the image's top edge: the planes resting on that edge (outward direction with
+// an upward component, supported by a vertex on the edge) are left out, so the hand may go on
+// out of view; the others stay, and the view's default bounds leave out nothing.
+TEST(BoundaryPlanes, PlanesRestingOnTheViewsEdgeAreOmitted) {
+  const std::vector<Vec2> cut = {{-0.1f, -0.2f}, {0.1f, -0.2f}, {0.1f, 0.1f}, {-0.1f, 0.1f}};
+  BoundaryPlaneBuilder builder;
+  BoundaryPlaneConfig config;
+  config.planeCount = 8;
+  std::vector<BoundaryPlane> planes;
+  builder.build(cut, config, Vec2::Zero(), planes);
+  EXPECT_EQ(planes.size(), 8u);
+  ViewBounds view;
+  view.min = Vec2(-0.7f, -0.2f);  // the top edge runs along the hull's top
+  view.max = Vec2(0.7f, 0.5f);
+  view.margin = 0.01f;
+  builder.build(cut, config, Vec2::Zero(), planes, view);
+  // Of 8 directions, up and the two diagonals up rest on the top edge.
+  ASSERT_EQ(planes.size(), 5u);
+  for (const BoundaryPlane& plane : planes) {
+    EXPECT_GE(plane.imageDirection.y(), -1e-6f);
+    for (const Vec2& q : cut) EXPECT_LE(plane.signedDistance(Vec3(q.x(), q.y(), 1.0f)), 1e-6f);
+  }
+  // The same hull well inside the view keeps every plane.
+  view.min = Vec2(-0.7f, -0.5f);
+  builder.build(cut, config, Vec2::Zero(), planes, view);
+  EXPECT_EQ(planes.size(), 8u);
+}
+
 TEST(BoundaryPlanes, EmptyInputGivesNoPlanes) {
   BoundaryPlaneBuilder builder;
   std::vector<BoundaryPlane> planes(3);

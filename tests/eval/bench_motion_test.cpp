@@ -39,22 +39,31 @@ TEST(MotionSuite, ClipsOnEveryProfileAndPlacementWithVariedHands) {
   EXPECT_NE(suite->skipped.find("animbank rows skipped"), std::string::npos);
   int oneHandClips = 0;
   for (const synth::ClipInfo& c : synth::clips()) oneHandClips += c.handCount == 1;
-  // Every one-hand clip on 4 profiles x 2 placements x 2 starts, and the two grasping clips
-  // with 3 held objects on 2 placements.
-  EXPECT_EQ(static_cast<int>(suite->items.size()), oneHandClips * 4 * 2 * 2 + 2 * 3 * 2);
+  // Every one-hand clip on 4 profiles x 2 placements x 2 starts, the two grasping clips with
+  // 3 held objects on 2 placements, and every one-hand clip past an image border on 2
+  // placements.
+  EXPECT_EQ(static_cast<int>(suite->items.size()),
+            oneHandClips * 4 * 2 * 2 + 2 * 3 * 2 + oneHandClips * 2);
   std::set<std::string> groups;
-  int heldObjects = 0;
+  int heldObjects = 0, pastTheBorder = 0;
   for (const SuiteItem& item : suite->items) {
     groups.insert(item.group);
     heldObjects += item.heldObject != synth::HeldObject::None;
+    if (item.viewShift != Vec2::Zero()) {
+      ++pastTheBorder;
+      EXPECT_EQ(item.profile, "tof");
+      EXPECT_FALSE(item.autoInit);
+    }
     EXPECT_EQ(item.speed, 2.5f);
     EXPECT_EQ(item.proportionSpread, 0.15f);
     EXPECT_EQ(item.frames, 90);
     EXPECT_TRUE(item.cuts.empty());
   }
   EXPECT_EQ(heldObjects, 2 * 3 * 2);
-  EXPECT_EQ(groups.size(), 4u * 2u * 2u + 2u);
+  EXPECT_EQ(pastTheBorder, oneHandClips * 2);
+  EXPECT_EQ(groups.size(), 4u * 2u * 2u + 2u + 2u);
   EXPECT_TRUE(groups.contains("held objects: clips x2.5 / tof / head / gt"));
+  EXPECT_TRUE(groups.contains("image border: clips x2.5 / tof / desk / gt"));
   EXPECT_TRUE(groups.contains("clips x2.5 / structured-light / head / auto"));
   // The same clip gets the same hand shape in every row; different clips differ.
   const auto seedOf = [&](const std::string& clip, const std::string& profile) {

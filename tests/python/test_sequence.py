@@ -74,3 +74,15 @@ def test_held_object_changes_the_depth_only_in_front_of_the_palm():
         dynahand.synth("wave", frames=1, held_object="mug")
     with pytest.raises(ValueError, match="held object size"):
         dynahand.synth("wave", frames=1, held_object="ball", held_object_size=0.5)
+
+
+def test_view_shift_moves_the_scene_and_keeps_the_ground_truth():
+    centred = dynahand.synth("wave", frames=1, profile="ideal")
+    shifted = dynahand.synth("wave", frames=1, profile="ideal", view_shift=(0, -100))
+    assert shifted.camera.cy == pytest.approx(centred.camera.cy - 100)
+    a, b = centred[0][0], shifted[0][0]
+    assert np.array_equal(a[100:], b[:-100])  # 100 rows up; the top rows went out of view
+    assert (a[:100] > 0).sum() > 500
+    assert np.array_equal(centred[0][2], shifted[0][2])
+    with pytest.raises(ValueError, match="view shift"):
+        dynahand.synth("wave", frames=1, view_shift=(400, 0))

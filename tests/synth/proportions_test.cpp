@@ -189,8 +189,9 @@ TEST(HandProportions, OutOfRangeFactorsAreRejectedAndWrittenToSynthJson) {
   ASSERT_TRUE(writeSequence(*seq, dir).ok());
   std::ifstream in(dir / "synth.json");
   const nlohmann::json j = nlohmann::json::parse(in);
-  EXPECT_EQ(j["version"], 3);
+  EXPECT_EQ(j["version"], 4);
   EXPECT_EQ(j["scene"]["held_object"], "none");
+  EXPECT_EQ(j["scene"]["view_shift_px"], nlohmann::json::array({0.0, 0.0}));
   ASSERT_TRUE(j.contains("proportions"));
   HandProportions read;
   for (std::size_t f = 0; f < 5; ++f) {

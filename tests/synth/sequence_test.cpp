@@ -347,6 +347,46 @@ TEST(SyntheticSequence, HeldObjectsAreDrawnAgainstThePalm) {
   EXPECT_FALSE(SyntheticSequence::create(bad).ok());
 }
 
+// The view shift moves the principal point: the same scene lands that many pixels over, the
+// ground truth (camera frame) stays, and a hand near the border goes on out of view.
+TEST(SyntheticSequence, ViewShiftMovesTheSceneInTheImage) {
+  SynthOptions o = optionsFor("wave", "ideal", 1);
+  Result<SyntheticSequence> centred = SyntheticSequence::create(o);
+  o.scene.viewShift = Vec2(24.0f, -100.0f);
+  Result<SyntheticSequence> shifted = SyntheticSequence::create(o);
+  ASSERT_TRUE(centred.ok() && shifted.ok());
+  const Intrinsics& a = centred->intrinsics();
+  const Intrinsics& b = shifted->intrinsics();
+  EXPECT_FLOAT_EQ(b.cx, a.cx + 24.0f);
+  EXPECT_FLOAT_EQ(b.cy, a.cy - 100.0f);
+  const SyntheticFrame& fa = centred->frame(0);
+  const std::vector<float> depthA(centred->exactDepth().begin(), centred->exactDepth().end());
+  const SyntheticFrame& fb = shifted->frame(0);
+  for (std::size_t j = 0; j < 21; ++j)
+    EXPECT_EQ(fa.hands[0].keypoints[j], fb.hands[0].keypoints[j]);
+  int compared = 0, same = 0, outOfView = 0;
+  for (int v = 0; v < a.height; ++v) {
+    for (int u = 0; u < a.width; ++u) {
+      const float za = depthA[static_cast<std::size_t>(v * a.width + u)];
+      if (za <= 0.0f) continue;
+      const int ub = u + 24, vb = v - 100;
+      if (ub >= b.width || vb < 0) {
+        ++outOfView;
+        continue;
+      }
+      const float zb = shifted->exactDepth()[static_cast<std::size_t>(vb * b.width + ub)];
+      ++compared;
+      same += std::fabs(za - zb) < 1e-4f;
+    }
+  }
+  EXPECT_GT(outOfView, 500) << "the fingers go out past the top edge";
+  EXPECT_GT(same, compared * 99 / 100);
+  o.scene.viewShift = Vec2(0.0f, 300.0f);
+  const Result<SyntheticSequence> bad = SyntheticSequence::create(o);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.message().find("view shift"), std::string::npos) << bad.message();
+}
+
 TEST(SyntheticSequence, PoseFilePlaybackReproducesTheRecordedPoses) {
   const std::filesystem::path dir = test::scratchDir("synth_pose_playback");
   SynthOptions o = optionsFor("count", "ideal", 12);

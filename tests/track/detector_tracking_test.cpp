@@ -119,9 +119,10 @@ TEST(DetectorTracking, HeadMountedCropIsCentredOnTheLimbsFreeEnd) {
 
 // animbank.pose frames 1376-1425 from the desk on active-stereo: the arm bends at the elbow
 // and for about 30 frames the elbow is nearer to the camera than the fist at the forearm's end.
-// Segmented nearest-first, the elbow is taken for the hand's region; the detector reads a hand
-// in it and the tracker follows it 34 cm from the fist. Told where the hand was tracked
-// (SegmentationConfig::hintReachM), the segmentation keeps to the fist.
+// Segmented nearest-first, the limb is explored from the elbow; it is attached where it leaves
+// the image lowest (the upper arm), so its free end, the fist, is taken for the hand. Told
+// where the hand was tracked (SegmentationConfig::hintReachM), the segmentation keeps to the
+// fist as well.
 TEST(DetectorTracking, AFistBeyondANearerElbowIsKept) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
   synth::SynthOptions o = test::animbankOptions(data, 1376, 50, "active-stereo");
@@ -134,8 +135,61 @@ TEST(DetectorTracking, AFistBeyondANearerElbowIsKept) {
   const double hinted = trackMeanError(*seq, TrackerSettings{}, 0, o.frameCount);
   std::printf("nearest volume first %.1f mm, kept to the tracked hand %.1f mm\n", unhinted * 1000,
               hinted * 1000);
-  EXPECT_GT(unhinted, 0.1) << "the elbow is taken for the hand";
+  EXPECT_LT(unhinted, 0.02) << "the elbow is not taken for the hand";
   EXPECT_LT(hinted, 0.02);
+}
+
+// The wave clip at 2.5x with the scene moved up in the image (synth::Scene::viewShift), so the
+// fingers go on out of view past the top edge: from the head-mounted camera and from the desk.
+// The segment keeps the hand's visible part (the limb is attached where it enters lowest) and
+// no boundary plane rests on the image's edge, so the joints in view are tracked about as well
+// as when the whole hand is seen (5.3 mm head-mounted, 6.1 mm desk). With every border contact an
+// attachment and planes along the edge, the head-mounted view's segment held the forearm and the
+// hand was lost (162 mm), and the desk's joints in view were 9.9 mm off.
+TEST(DetectorTracking, AHandGoingOnOutOfViewIsTrackedWhereItIsSeen) {
+  struct Case {
+    synth::CameraPlacement placement;
+    Vec2 shift;
+  };
+  // The top edge between the knuckles and the fingertips (the desk's hand is upright).
+  for (const Case& c : {Case{synth::CameraPlacement::HeadMounted, Vec2(0.0f, -115.0f)},
+                        Case{synth::CameraPlacement::DeskFacing, Vec2(0.0f, -75.0f)}}) {
+    synth::SynthOptions o = test::clipOptions("wave", "tof", 45);
+    o.speed = 2.5f;
+    o.scene.placement = c.placement;
+    o.scene.viewShift = c.shift;
+    auto seq = synth::SyntheticSequence::create(o);
+    ASSERT_TRUE(seq) << seq.message();
+    const Intrinsics& k = seq->intrinsics();
+    auto tracker = Tracker::create(seq->model(0), k);
+    ASSERT_TRUE(tracker) << tracker.message();
+    double sum = 0.0;
+    int joints = 0, outOfView = 0;
+    for (int f = 0; f < o.frameCount; ++f) {
+      const synth::SyntheticFrame& frame = seq->frame(f);
+      if (f == 0) (*tracker)->initialize(frame.hands[0].pose);
+      const TrackResult& r = (*tracker)->track(frame.depth);
+      ASSERT_TRUE(r.hands[0].tracked) << "frame " << f;
+      for (std::size_t j = 0; j < 21; ++j) {
+        const Vec3& truth = frame.hands[0].keypoints[j];
+        const Vec2 uv = k.project(truth);
+        if (uv.x() < 0.0f || uv.y() < 0.0f || uv.x() > static_cast<float>(k.width - 1) ||
+            uv.y() > static_cast<float>(k.height - 1)) {
+          ++outOfView;
+          continue;
+        }
+        sum += static_cast<double>((r.hands[0].keypoints21[j] - truth).norm());
+        ++joints;
+      }
+    }
+    const double mean = sum / std::max(joints, 1);
+    const double outShare = static_cast<double>(outOfView) / (outOfView + joints);
+    std::printf("%s: %.0f%% of the joints out of view, those in view %.1f mm off\n",
+                c.placement == synth::CameraPlacement::HeadMounted ? "head" : "desk",
+                100.0 * outShare, 1000.0 * mean);
+    EXPECT_GT(outShare, 0.1) << "the hand goes on out of view";
+    EXPECT_LT(mean, 0.010);
+  }
 }
 
 TEST(DetectorTracking, WithoutTheDetectorNoDetectorSimulationRuns) {

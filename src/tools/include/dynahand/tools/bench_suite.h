@@ -90,6 +90,9 @@ struct SuiteItem {
   /// A table this far (m) below the scene's rest wrist position (synth::Scene::tableDrop), or
   /// lower where the motion would take the hand into it (synth::Scene::tableBelowHand); 0: none.
   float tableDropM = 0.0f;
+  /// Pixels: the scene moved in the image (synth::Scene::viewShift), so the hand reaches past
+  /// an image border; joints outside the image are not scored.
+  Vec2 viewShift = Vec2::Zero();
   /// >= 0: each frame the tracker is given the ground-truth keypoints, plus Gaussian noise of
   /// this standard deviation per axis (m), instead of the learned detector's
   /// (Tracker::setKeypoints, confidence 1): what a perfect or a given-noise detector would

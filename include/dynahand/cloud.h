@@ -105,8 +105,8 @@ struct SegmentationConfig {
   float sensorMinRangeM = 0.20f;
   /// One hand, with a HandHint (process): when the nearest volume comes no nearer than this
   /// (m) to the tracked hand's centre while some sample does, the volume is grown from that
-  /// sample instead (an elbow nearer to the camera than the hand at its forearm's end).
-  /// 0 = hints are not used.
+  /// sample instead (a nearer surface of the same arm, or another one, whose limb end is not
+  /// the tracked hand). 0 = hints are not used.
   float hintReachM = 0.06f;
 };
 

@@ -40,6 +40,13 @@ void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
   cells_.reserve(cells);
   queue_.reserve(cells);
   planeContacts_.reserve(cells);
+  // keepBodySide's, each at most one entry per attachment.
+  sortedAttachments_.reserve(cells);
+  sortedIndex_.reserve(cells);
+  stack_.reserve(cells);
+  groupOf_.reserve(cells);
+  groupRows_.reserve(cells);
+  groupCounts_.reserve(cells);
 }
 
 int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
@@ -189,6 +196,7 @@ void LimbEndFinder::keepBodySide(const DepthGrid& grid, const Intrinsics& k, flo
         for (int di = -1; di <= 1; ++di) {
           const int ni = i + di, nj = j + dj;
           if ((di == 0 && dj == 0) || ni < 0 || nj < 0 || ni >= w || nj >= h) continue;
+          if (state_[static_cast<std::size_t>(nj * w + ni)] != kAttachment) continue;
           const int n = indexOf(nj * w + ni);
           if (n < 0 || groupOf_[static_cast<std::size_t>(n)] >= 0) continue;
           groupOf_[static_cast<std::size_t>(n)] = group;

@@ -24,9 +24,10 @@ class LimbEndFinder {
   // ball of limbRadiusM around the seed's point. Its attachments are the connected cells beyond the
   // ball, the cells within borderMarginPixels of the image border, and the cells nearer than
   // nearCutDepthM (m) where the surface, coming nearer, runs into missing data (cut off by the
-  // sensor's near range). Returns the cell of the surface farthest from every attachment, measured
-  // along the surface, or -1 when the surface has no attachment (a hand on its own: its nearest
-  // point is fine). planeCells (optional, per grid cell, nonzero: a sample of a support plane
+  // sensor's near range). Of separate attachments only the body's side is kept (keepBodySide).
+  // Returns the cell of the surface farthest from every attachment kept, measured along the
+  // surface, or -1 when the surface has no attachment (a hand on its own: its nearest point is
+  // fine). planeCells (optional, per grid cell, nonzero: a sample of a support plane
   // taken out of the grid): a surface with no other attachment is attached where it meets such
   // cells (a forearm rising from a table, which hides the rest of the arm).
   int find(const DepthGrid& grid, const Intrinsics& k, int seed, const DepthStepRule& rule,
@@ -34,12 +35,13 @@ class LimbEndFinder {
            const std::uint8_t* planeCells = nullptr);
 
  private:
-  // find's stages after the surface and its attachments are found: of several separate
-  // attachments, the lowest in the image is where the limb is attached (the body is below the
-  // view from a desk or a head-mounted camera), and one that lies higher by more than
-  // separationM (m, at depthM) is where the hand goes on out of view: it is not an attachment;
-  // then steps along the surface
-  // from the attachments (breadth-first), then the cell farthest from all of them.
+  // find's stages after the surface and its attachments are found. keepBodySide: of several
+  // separate attachments (of any kind: the image border, the ball's edge, a near cut), the
+  // lowest in the image is where the limb is attached, as the body is below the view of a desk
+  // or a head-mounted camera; one whose mean row lies higher by more than separationM (m, at
+  // the seed's depth depthM) is not an attachment (a hand going on out of view, a forearm
+  // leaving the ball toward the fist). Then steps along the surface from the attachments kept
+  // (breadth-first), then the cell farthest from all of them.
   void keepBodySide(const DepthGrid& grid, const Intrinsics& k, float depthM, float separationM);
   void stepFromAttachments(const DepthGrid& grid, const Intrinsics& k, const DepthStepRule& rule);
   int farthestCell(int width) const;

@@ -228,7 +228,7 @@ Result<SyntheticSequence> SyntheticSequence::create(const SynthOptions& options)
   Intrinsics& k = profile->intrinsics;
   if (std::fabs(options.scene.viewShift.x()) > static_cast<float>(k.width) ||
       std::fabs(options.scene.viewShift.y()) > static_cast<float>(k.height))
-    return Error{"view shift must be within the image's width and height"};
+    return Error{"synth options: view shift must be within the image's width and height"};
   k.cx += options.scene.viewShift.x();
   k.cy += options.scene.viewShift.y();
   auto state = std::make_unique<State>(options, *profile);

@@ -40,11 +40,8 @@ void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
   cells_.reserve(cells);
   queue_.reserve(cells);
   planeContacts_.reserve(cells);
-  // keepBodySide's, each at most one entry per attachment.
-  sortedAttachments_.reserve(cells);
-  sortedIndex_.reserve(cells);
+  group_.reserve(cells);
   stack_.reserve(cells);
-  groupOf_.reserve(cells);
   groupRows_.reserve(cells);
   groupCounts_.reserve(cells);
 }
@@ -153,54 +150,36 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
 
 void LimbEndFinder::keepBodySide(const DepthGrid& grid, const Intrinsics& k, float depthM,
                                  float separationM) {
-  // Connected groups of attachment cells (8-neighbours), each with its mean row.
+  // Connected groups of attachment cells (8-neighbours, flood-filled over the grid), each with
+  // its mean row.
   const int w = grid.width;
   const int h = grid.height;
-  groupOf_.assign(queue_.size(), -1);
+  group_.assign(state_.size(), -1);
   groupRows_.clear();
   groupCounts_.clear();
-  stack_.clear();
-  const auto indexOf = [&](int c) {
-    const auto it = std::lower_bound(sortedAttachments_.begin(), sortedAttachments_.end(), c);
-    return it != sortedAttachments_.end() && *it == c
-               ? static_cast<int>(
-                     sortedIndex_[static_cast<std::size_t>(it - sortedAttachments_.begin())])
-               : -1;
-  };
-  sortedAttachments_.clear();
-  sortedIndex_.clear();
-  for (std::size_t a = 0; a < queue_.size(); ++a)
-    sortedAttachments_.push_back((queue_[a] >> 16) * w + (queue_[a] & 0xffff));
-  sortedIndex_.resize(queue_.size());
-  for (std::size_t a = 0; a < queue_.size(); ++a) sortedIndex_[a] = static_cast<std::int32_t>(a);
-  std::sort(sortedIndex_.begin(), sortedIndex_.end(), [&](std::int32_t x, std::int32_t y) {
-    return sortedAttachments_[static_cast<std::size_t>(x)] <
-           sortedAttachments_[static_cast<std::size_t>(y)];
-  });
-  std::sort(sortedAttachments_.begin(), sortedAttachments_.end());
-  for (std::size_t a = 0; a < queue_.size(); ++a) {
-    if (groupOf_[a] >= 0) continue;
+  for (const std::int32_t first : queue_) {
+    const int c0 = (first >> 16) * w + (first & 0xffff);
+    if (group_[static_cast<std::size_t>(c0)] >= 0) continue;
     const int group = static_cast<int>(groupRows_.size());
     groupRows_.push_back(0.0f);
     groupCounts_.push_back(0);
-    groupOf_[a] = group;
-    stack_.push_back(static_cast<std::int32_t>(a));
+    group_[static_cast<std::size_t>(c0)] = group;
+    stack_.assign(1, first);
     while (!stack_.empty()) {
-      const auto b = static_cast<std::size_t>(stack_.back());
+      const std::int32_t packed = stack_.back();
       stack_.pop_back();
-      const int i = queue_[b] & 0xffff;
-      const int j = queue_[b] >> 16;
+      const int i = packed & 0xffff;
+      const int j = packed >> 16;
       groupRows_[static_cast<std::size_t>(group)] += static_cast<float>(j);
       ++groupCounts_[static_cast<std::size_t>(group)];
       for (int dj = -1; dj <= 1; ++dj) {
         for (int di = -1; di <= 1; ++di) {
           const int ni = i + di, nj = j + dj;
           if ((di == 0 && dj == 0) || ni < 0 || nj < 0 || ni >= w || nj >= h) continue;
-          if (state_[static_cast<std::size_t>(nj * w + ni)] != kAttachment) continue;
-          const int n = indexOf(nj * w + ni);
-          if (n < 0 || groupOf_[static_cast<std::size_t>(n)] >= 0) continue;
-          groupOf_[static_cast<std::size_t>(n)] = group;
-          stack_.push_back(n);
+          const auto n = static_cast<std::size_t>(nj * w + ni);
+          if (state_[n] != kAttachment || group_[n] >= 0) continue;
+          group_[n] = group;
+          stack_.push_back(pack(ni, nj));
         }
       }
     }
@@ -215,11 +194,10 @@ void LimbEndFinder::keepBodySide(const DepthGrid& grid, const Intrinsics& k, flo
   const float apart = separationM * k.fy / (depthM * static_cast<float>(grid.step));
   std::size_t kept = 0;
   for (std::size_t a = 0; a < queue_.size(); ++a) {
-    const auto g = static_cast<std::size_t>(groupOf_[a]);
-    const int c = (queue_[a] >> 16) * w + (queue_[a] & 0xffff);
-    if (groupRows_[g] < lowest - apart) {
-      state_[static_cast<std::size_t>(c)] = kSurface;
-      steps_[static_cast<std::size_t>(c)] = -1;
+    const auto c = static_cast<std::size_t>((queue_[a] >> 16) * w + (queue_[a] & 0xffff));
+    if (groupRows_[static_cast<std::size_t>(group_[c])] < lowest - apart) {
+      state_[c] = kSurface;
+      steps_[c] = -1;
     } else {
       queue_[kept++] = queue_[a];
     }

@@ -49,17 +49,15 @@ class LimbEndFinder {
   std::vector<int> steps_;           // (cells) steps along the surface from an attachment, -1
   std::vector<std::uint8_t> state_;  // (cells) 0 = unseen, 1 = on the surface, 2 = attachment
   // Packed cells (j << 16 | i):
-  std::vector<std::int32_t> cells_;              // the surface's cells in discovery order
-  std::vector<std::int32_t> queue_;              // breadth-first order from the attachments
-  std::vector<std::int32_t> planeContacts_;      // surface cells next to a support plane's cells
-  std::vector<std::int32_t> sortedAttachments_;  // attachment cells (j * width + i), sorted
-  std::vector<std::int32_t> sortedIndex_;        // their indices in queue_
-  std::vector<std::int32_t> stack_;              // flood fill over attachments
-  std::vector<int> groupOf_;                     // (queue_) connected group of each attachment
-  std::vector<float> groupRows_;                 // (groups) mean row (cells)
-  std::vector<int> groupCounts_;                 // (groups) cells
-  std::vector<float> columnX_;                   // (width) (u - cx) / fx of each column
-  std::vector<float> rowY_;                      // (height) (v - cy) / fy of each row
+  std::vector<std::int32_t> cells_;          // the surface's cells in discovery order
+  std::vector<std::int32_t> queue_;          // breadth-first order from the attachments
+  std::vector<std::int32_t> planeContacts_;  // surface cells next to a support plane's cells
+  std::vector<std::int32_t> stack_;          // flood fill over the attachments
+  std::vector<int> group_;                   // (cells) connected group of an attachment, -1
+  std::vector<float> groupRows_;             // (groups) mean row (cells)
+  std::vector<int> groupCounts_;             // (groups) cells
+  std::vector<float> columnX_;               // (width) (u - cx) / fx of each column
+  std::vector<float> rowY_;                  // (height) (v - cy) / fy of each row
 };
 
 }  // namespace dynahand::cloud

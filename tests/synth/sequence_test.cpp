@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <numbers>
 
 #include "dynahand/sequence.h"
@@ -385,6 +386,11 @@ TEST(SyntheticSequence, ViewShiftMovesTheSceneInTheImage) {
   const Result<SyntheticSequence> bad = SyntheticSequence::create(o);
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.message().find("view shift"), std::string::npos) << bad.message();
+  o.scene.viewShift = Vec2(std::numeric_limits<float>::quiet_NaN(), 0.0f);
+  const Result<SyntheticSequence> notFinite = SyntheticSequence::create(o);
+  ASSERT_FALSE(notFinite.ok());
+  EXPECT_NE(notFinite.message().find("view shift must be finite"), std::string::npos)
+      << notFinite.message();
 }
 
 TEST(SyntheticSequence, PoseFilePlaybackReproducesTheRecordedPoses) {

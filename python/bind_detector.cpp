@@ -30,7 +30,8 @@ std::uint64_t seedValue(const py::object& seed) {
 // `dynahand detector data` writes its file from (detect::forEachSampleBlock): the same values,
 // at the same speed.
 py::dict detectorData(const std::string& split, int count, const py::object& seed, int threads,
-                      double proportionSpread, double heldObjectShare, bool heldObjectBoxes) {
+                      double proportionSpread, double heldObjectShare, bool heldObjectBoxes,
+                      double sharedCurlShare) {
   detect::DataOptions options;
   if (split == "train") {
     options.split = detect::DataSplit::Train;
@@ -47,12 +48,15 @@ py::dict detectorData(const std::string& split, int count, const py::object& see
     throw py::value_error("proportion_spread must be in [0, 0.5]");
   if (!(heldObjectShare >= 0.0 && heldObjectShare <= 1.0))
     throw py::value_error("held_object_share must be in [0, 1]");
+  if (!(sharedCurlShare >= 0.0 && sharedCurlShare <= 1.0))
+    throw py::value_error("shared_curl_share must be in [0, 1]");
   options.count = count;
   options.seed = seedValue(seed);
   options.threads = threads;
   options.proportionSpread = static_cast<float>(proportionSpread);  // as the command's 0.15f
   options.heldObjectShare = static_cast<float>(heldObjectShare);
   options.heldObjectBoxes = heldObjectBoxes;
+  options.sharedCurlShare = static_cast<float>(sharedCurlShare);
 
   constexpr py::ssize_t kSide = detect::kCropPixels, kPoints = detect::kKeypointCount;
   const py::ssize_t n = count;
@@ -102,9 +106,10 @@ void bindDetectorData(py::module_& m) {
   m.def("detector_data", &detectorData, py::arg("split") = "train", py::arg("count") = 1000,
         py::arg("seed") = 1, py::arg("threads") = 1, py::arg("proportion_spread") = 0.15,
         py::arg("held_object_share") = 0.15, py::arg("held_object_boxes") = false,
+        py::arg("shared_curl_share") = 0.3,
         "The learned detector's synthetic training data as numpy arrays: the samples `dynahand "
         "detector data --split S --count N --seed SEED --proportion-spread P --held-object-share "
-        "H [--held-object-boxes]` writes to its file "
+        "H [--held-object-boxes] --shared-curl-share C` writes to its file "
         "(docs/formats/detector-data.md), value for value (sample i is a function of (split, "
         "seed, i) alone; the same for any threads). Returns a dict: pixels (N, 64, 64) uint8 "
         "(the crop; x in [-1, 1] is pixels / 127.5 - 1), uvd (N, 21, 3) float32 (keypoints in "

@@ -322,6 +322,9 @@ def detector_data(
     seed: int = 1,
     threads: int = 1,
     proportion_spread: float = 0.15,
+    held_object_share: float = 0.15,
+    held_object_boxes: bool = False,
+    shared_curl_share: float = 0.3,
 ) -> _DetectorData:
     """The detector's synthetic training samples, value for value those
     `dynahand detector data --split S --count N --seed SEED` writes (split: "train" or

@@ -60,6 +60,10 @@ const CommandRegistration kDetectorCommand{Command{
             ->check(CLI::Range(0.0, 1.0));
         app->add_flag("--held-object-boxes", flags->data.heldObjectBoxes,
                       "held objects may be boxes as well as balls and cylinders");
+        app->add_option("--shared-curl-share", flags->data.sharedCurlShare,
+                        "share of random poses whose fingers curl together (a grasp)")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0, 1.0));
       }
       data->add_option("-o,--out", flags->out, "output file")->required();
       eval->add_option("--weights", flags->weights,

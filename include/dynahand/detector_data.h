@@ -36,6 +36,11 @@ struct DataOptions {
   /// Held objects may be boxes (a third of them) as well as balls and cylinders; off, the
   /// samples are those of the generator without boxes, byte for byte.
   bool heldObjectBoxes = false;
+  /// Share of the random poses whose four fingers share one curl (a grasp: each finger near
+  /// a common curl); the others curl each finger on its own. Real hands move their fingers
+  /// together (neighbouring fingers' curls correlate 0.7-0.98 in captured motion), so a
+  /// higher share teaches the network that a hidden finger curls like the visible ones.
+  float sharedCurlShare = 0.3f;
 };
 
 /// Clips never used for training (the held-back motions).

@@ -91,11 +91,12 @@ std::vector<int> jointFingers(const model::ArticulatedModel& m) {
 }
 
 // Joint angles drawn within the limits: per finger a curl shared by its flexion joints
-// (fingers are mostly straight or curled together), abduction and wrist uniform.
-void randomAngles(const model::ArticulatedModel& m, const std::vector<int>& fingers, Rng& rng,
-                  model::JointAngles& angles) {
+// (fingers are mostly straight or curled together), abduction and wrist uniform. With
+// probability sharedCurlShare every digit's curl lies near one common curl (a grasp).
+void randomAngles(const model::ArticulatedModel& m, const std::vector<int>& fingers,
+                  float sharedCurlShare, Rng& rng, model::JointAngles& angles) {
   std::array<float, 5> curl{};
-  const bool grasp = chance(rng, 0.3f);
+  const bool grasp = chance(rng, sharedCurlShare);
   const float shared = uniform(rng, 0.0f, 1.0f);
   for (float& c : curl) {
     if (grasp) {
@@ -189,7 +190,7 @@ PosedHand randomHand(Worker& w, const DataOptions& o, Rng& rng, const Vec3& targ
                                              : pick < 0.75f ? 1
                                                             : 2);
   if (source == 0) {
-    randomAngles(m, w.fingers, rng, angles);
+    randomAngles(m, w.fingers, o.sharedCurlShare, rng, angles);
   } else {
     const std::string& clip =
         clipNames[std::uniform_int_distribution<std::size_t>(0, clipNames.size() - 1)(rng)];

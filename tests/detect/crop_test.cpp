@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -191,6 +192,61 @@ TEST(DetectorData, HeldObjectsFollowTheirShareAndBoxesOnlyWhenAsked) {
   }
   EXPECT_GE(changedByObject, kSamples - 1);
   EXPECT_GE(changedByBoxes, 1);
+}
+
+// How far a finger (digit 1..4) is curled, from its keypoints: 1 - (knuckle to tip) / (the
+// sum of its three bones), 0 straight.
+float fingerCurl(const std::array<Vec3, kKeypointCount>& k, int digit) {
+  const std::size_t b = static_cast<std::size_t>(1 + 4 * digit);
+  float bones = 0.0f;
+  for (std::size_t i = 0; i < 3; ++i) bones += (k[b + i + 1] - k[b + i]).norm();
+  return 1.0f - (k[b + 3] - k[b]).norm() / bones;
+}
+
+// Mean correlation between neighbouring fingers' curls over the random-pose samples of a set.
+double neighbourCurlCorrelation(const DataOptions& options, int samples) {
+  std::vector<std::array<double, 4>> curls;
+  for (int i = 0; i < samples; ++i) {
+    const DataSample s = makeSample(options, i);
+    if (s.source != 0) continue;
+    std::array<double, 4> c{};
+    for (int d = 0; d < 4; ++d) c[static_cast<std::size_t>(d)] = fingerCurl(s.keypoints, d + 1);
+    curls.push_back(c);
+  }
+  double sum = 0.0;
+  for (std::size_t f = 0; f < 3; ++f) {
+    double ma = 0.0, mb = 0.0;
+    for (const auto& c : curls) ma += c[f], mb += c[f + 1];
+    ma /= static_cast<double>(curls.size());
+    mb /= static_cast<double>(curls.size());
+    double ab = 0.0, aa = 0.0, bb = 0.0;
+    for (const auto& c : curls) {
+      ab += (c[f] - ma) * (c[f + 1] - mb);
+      aa += (c[f] - ma) * (c[f] - ma);
+      bb += (c[f + 1] - mb) * (c[f + 1] - mb);
+    }
+    sum += ab / std::sqrt(aa * bb);
+  }
+  return sum / 3.0;
+}
+
+// The shared-curl share sets how often a random pose's fingers curl together: at 1 every
+// random pose is a grasp, neighbouring fingers' curls then correlate strongly; at 0 each
+// finger curls on its own.
+TEST(DetectorData, SharedCurlShareMakesFingersCurlTogether) {
+  DataOptions apart;
+  apart.seed = 11;
+  apart.heldObjectShare = 0.0f;
+  apart.sharedCurlShare = 0.0f;
+  DataOptions together = apart;
+  together.sharedCurlShare = 1.0f;
+  constexpr int kSamples = 160;  // about half are random poses
+  const double rApart = neighbourCurlCorrelation(apart, kSamples);
+  const double rTogether = neighbourCurlCorrelation(together, kSamples);
+  std::printf("neighbouring fingers' curl correlation: %.2f apart, %.2f together\n", rApart,
+              rTogether);
+  EXPECT_LT(rApart, 0.35);
+  EXPECT_GT(rTogether, 0.7);
 }
 
 TEST(DetectorData, FileBytesDoNotDependOnThreads) {

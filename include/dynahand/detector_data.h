@@ -36,10 +36,10 @@ struct DataOptions {
   /// Held objects may be boxes (a third of them) as well as balls and cylinders; off, the
   /// samples are those of the generator without boxes, byte for byte.
   bool heldObjectBoxes = false;
-  /// Share of the random poses whose four fingers share one curl (a grasp: each finger near
-  /// a common curl); the others curl each finger on its own. Real hands move their fingers
-  /// together (neighbouring fingers' curls correlate 0.7-0.98 in captured motion), so a
-  /// higher share teaches the network that a hidden finger curls like the visible ones.
+  /// Share of the random poses whose digits, thumb included, share one curl (a grasp: each
+  /// near a common curl); the others curl each digit on its own. Real hands move their
+  /// fingers together (neighbouring digits' curls correlate 0.8-0.98 in captured motion), so
+  /// a higher share shows the network hidden fingers curled like the visible ones.
   float sharedCurlShare = 0.3f;
 };
 

@@ -30,6 +30,10 @@ bool joined(const DepthStepRule& rule, float za, float zb, float spacing) {
 std::int32_t pack(int i, int j) {
   return (j << 16) | i;
 }
+// The grid index (row-major) of a packed cell.
+std::size_t cellIndex(std::int32_t packed, int width) {
+  return static_cast<std::size_t>((packed >> 16) * width + (packed & 0xffff));
+}
 }  // namespace
 
 void LimbEndFinder::reserve(std::size_t cells, int maxWidth, int maxHeight) {
@@ -134,7 +138,7 @@ int LimbEndFinder::find(const DepthGrid& grid, const Intrinsics& k, int seed,
   if (!attached) {
     // Attached nowhere else: where it meets a support plane.
     for (const std::int32_t packed : planeContacts_) {
-      const auto c = static_cast<std::size_t>((packed >> 16) * w + (packed & 0xffff));
+      const std::size_t c = cellIndex(packed, w);
       state_[c] = kAttachment;
       steps_[c] = 0;
       queue_.push_back(packed);
@@ -158,12 +162,12 @@ void LimbEndFinder::keepBodySide(const DepthGrid& grid, const Intrinsics& k, flo
   groupRows_.clear();
   groupCounts_.clear();
   for (const std::int32_t first : queue_) {
-    const int c0 = (first >> 16) * w + (first & 0xffff);
-    if (group_[static_cast<std::size_t>(c0)] >= 0) continue;
+    const std::size_t c0 = cellIndex(first, w);
+    if (group_[c0] >= 0) continue;
     const int group = static_cast<int>(groupRows_.size());
     groupRows_.push_back(0.0f);
     groupCounts_.push_back(0);
-    group_[static_cast<std::size_t>(c0)] = group;
+    group_[c0] = group;
     stack_.assign(1, first);
     while (!stack_.empty()) {
       const std::int32_t packed = stack_.back();
@@ -194,7 +198,7 @@ void LimbEndFinder::keepBodySide(const DepthGrid& grid, const Intrinsics& k, flo
   const float apart = separationM * k.fy / (depthM * static_cast<float>(grid.step));
   std::size_t kept = 0;
   for (std::size_t a = 0; a < queue_.size(); ++a) {
-    const auto c = static_cast<std::size_t>((queue_[a] >> 16) * w + (queue_[a] & 0xffff));
+    const std::size_t c = cellIndex(queue_[a], w);
     if (groupRows_[static_cast<std::size_t>(group_[c])] < lowest - apart) {
       state_[c] = kSurface;
       steps_[c] = -1;
@@ -238,11 +242,11 @@ int LimbEndFinder::farthestCell(int width) const {
   int end = -1;
   int farthest = -1;
   for (const std::int32_t packed : cells_) {
-    const int c = (packed >> 16) * width + (packed & 0xffff);
-    const int d = steps_[static_cast<std::size_t>(c)];
+    const std::size_t c = cellIndex(packed, width);
+    const int d = steps_[c];
     if (d > farthest) {
       farthest = d;
-      end = c;
+      end = static_cast<int>(c);
     }
   }
   return end;

@@ -708,6 +708,7 @@ std::vector<SuiteRow> summarizeSuite(const std::vector<SuiteItemResult>& results
         } else {
           acquireSum += r->framesToAcquire;
           ++acquired;
+          if (r->framesToAcquire <= kPromptAcquireFrames) ++row.promptlyAcquired;
           row.maxFramesToAcquire = std::max(row.maxFramesToAcquire, r->framesToAcquire);
         }
       }
@@ -749,6 +750,8 @@ std::string acquireText(const SuiteRow& r) {
   if (r.autoItems == r.neverAcquired) return fmt::format("never ({})", r.neverAcquired);
   std::string s = fmt::format("{:.1f} / {}", r.meanFramesToAcquire, r.maxFramesToAcquire);
   if (r.neverAcquired > 0) s += fmt::format(", {} never", r.neverAcquired);
+  s += fmt::format("; {:.0f}% <= {}", 100.0 * r.promptlyAcquired / r.autoItems,
+                   kPromptAcquireFrames);
   return s;
 }
 
@@ -781,13 +784,13 @@ std::string detectorText(const SuiteRow& r) {
 }  // namespace
 
 std::string motionTableText(const std::vector<SuiteRow>& rows) {
-  std::string s =
-      fmt::format("{:<44} {:>5} {:>6} {:>8} {:>8} {:>7} {:>11} {:>9} {:>16} {:>22} {:>7}\n",
-                  "motion row", "items", "frames", "mean mm", "p95 mm", "<=30mm", "detector mm",
-                  "misfit mm", "acquire mean/max", "re-acquire median", "p50 ms");
+  std::string s = fmt::format(
+      "{:<44} {:>5} {:>6} {:>8} {:>8} {:>7} {:>11} {:>9} {:>28} {:>22} {:>7}\n", "motion row",
+      "items", "frames", "mean mm", "p95 mm", "<=30mm", "detector mm", "misfit mm",
+      fmt::format("acquire mean/max; <={}", kPromptAcquireFrames), "re-acquire median", "p50 ms");
   for (const auto& r : rows) {
     s += fmt::format(
-        "{:<44} {:>5} {:>6} {:>8.1f} {:>8.1f} {:>6.1f}% {:>11} {:>9.1f} {:>16} {:>22} {:>7.2f}\n",
+        "{:<44} {:>5} {:>6} {:>8.1f} {:>8.1f} {:>6.1f}% {:>11} {:>9.1f} {:>28} {:>22} {:>7.2f}\n",
         r.label, r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30, detectorText(r),
         r.misfitMm, acquireText(r), reacquireText(r), r.p50Ms);
   }
@@ -795,11 +798,13 @@ std::string motionTableText(const std::vector<SuiteRow>& rows) {
 }
 
 std::string motionTableMarkdown(const std::vector<SuiteRow>& rows) {
-  std::string s =
+  std::string s = fmt::format(
       "| motion row | items | frames | mean error (mm) | p95 (mm) | frames max joint <= 30 mm | "
       "detector alone: mean error (mm) | model misfit: mean error (mm) | auto init: frames to "
-      "acquire (mean / max) | frames to re-acquire after a cut (median / cuts) | p50 ms |\n"
-      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+      "acquire (mean / max; share of items within {}) | frames to re-acquire after a cut (median / "
+      "cuts) | p50 ms |\n"
+      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+      kPromptAcquireFrames);
   for (const auto& r : rows) {
     s += fmt::format(
         "| {} | {} | {} | {:.1f} | {:.1f} | {:.1f}% | {} | {:.1f} | {} | {} | {:.2f} |\n", r.label,
@@ -811,12 +816,13 @@ std::string motionTableMarkdown(const std::vector<SuiteRow>& rows) {
 
 std::string suiteTableText(const std::vector<SuiteRow>& rows) {
   std::string s =
-      fmt::format("{:<40} {:>5} {:>6} {:>8} {:>8} {:>7} {:>16} {:>7} {:>7} {:>7} {:>7}\n",
-                  "suite row", "items", "frames", "mean mm", "p95 mm", "<=30mm", "acquire mean/max",
-                  "p50 ms", "p99 ms", "CPU p50", "frame/s");
+      fmt::format("{:<40} {:>5} {:>6} {:>8} {:>8} {:>7} {:>22} {:>7} {:>7} {:>7} {:>7}\n",
+                  "suite row", "items", "frames", "mean mm", "p95 mm", "<=30mm",
+                  fmt::format("acquire mean/max; <={}", kPromptAcquireFrames), "p50 ms", "p99 ms",
+                  "CPU p50", "frame/s");
   for (const auto& r : rows) {
     s += fmt::format(
-        "{:<40} {:>5} {:>6} {:>8.1f} {:>8.1f} {:>6.1f}% {:>16} {:>7.2f} {:>7.2f} {:>7.2f} "
+        "{:<40} {:>5} {:>6} {:>8.1f} {:>8.1f} {:>6.1f}% {:>22} {:>7.2f} {:>7.2f} {:>7.2f} "
         "{:>7.1f}\n",
         r.label, r.items, r.frames, r.meanMm, r.p95Mm, 100.0 * r.success30, acquireText(r), r.p50Ms,
         r.p99Ms, r.p50CpuMs, r.framesPerSecond);
@@ -825,10 +831,12 @@ std::string suiteTableText(const std::vector<SuiteRow>& rows) {
 }
 
 std::string suiteTableMarkdown(const std::vector<SuiteRow>& rows) {
-  std::string s =
+  std::string s = fmt::format(
       "| suite row | items | frames | mean error (mm) | p95 (mm) | frames max joint <= 30 mm | "
-      "auto init: frames to acquire (mean / max) | p50 ms | p99 ms | p50 CPU ms | frames/s |\n"
-      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+      "auto init: frames to acquire (mean / max; share of items within {}) | p50 ms | p99 ms | "
+      "p50 CPU ms | frames/s |\n"
+      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+      kPromptAcquireFrames);
   for (const auto& r : rows) {
     s += fmt::format(
         "| {} | {} | {} | {:.1f} | {:.1f} | {:.1f}% | {} | {:.2f} | {:.2f} | {:.2f} | {:.1f} |\n",

@@ -130,6 +130,29 @@ TEST(MotionSuite, ReacquisitionIsCountedFromEachCutUntilTheNext) {
   EXPECT_NE(table.find("| 3 / 4 cuts, 1 never |"), std::string::npos) << table;
 }
 
+// Automatic starts: mean and max over the items that acquired, how many never did, and the
+// share of all of them acquired within kPromptAcquireFrames (never counts as not).
+TEST(MotionSuite, AcquisitionCountsTheItemsAcquiredPromptly) {
+  std::vector<SuiteItemResult> results;
+  for (const int frames : {0, kPromptAcquireFrames, kPromptAcquireFrames + 1, -1}) {
+    SuiteItemResult r;
+    r.item.group = "segments";
+    r.item.autoInit = true;
+    r.framesToAcquire = frames;
+    r.frameMs = r.frameCpuMs = {1.0};
+    results.push_back(r);
+  }
+  const std::vector<SuiteRow> rows = summarizeSuite(results);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].autoItems, 4);
+  EXPECT_EQ(rows[0].neverAcquired, 1);
+  EXPECT_EQ(rows[0].promptlyAcquired, 2);
+  EXPECT_EQ(rows[0].maxFramesToAcquire, kPromptAcquireFrames + 1);
+  EXPECT_DOUBLE_EQ(rows[0].meanFramesToAcquire, (2.0 * kPromptAcquireFrames + 1.0) / 3.0);
+  const std::string table = motionTableMarkdown(rows);
+  EXPECT_NE(table.find("| 3.7 / 6, 1 never; 50% <= 5 |"), std::string::npos) << table;
+}
+
 // One frame whose truth is the origin for every joint and whose prediction is off by
 // offsetsM[j] (m, along x) at joint j, 0 elsewhere.
 SequenceKeypoints oneFrame(const std::vector<std::pair<int, float>>& offsetsM) {

@@ -157,6 +157,9 @@ struct MotionSuite {
 Result<MotionSuite> motionSuite(const MotionSuiteOptions& options);
 
 inline constexpr double kAcquiredMaxJointMm = 30.0;  ///< "tracking" for frames-to-acquire
+/// An item acquired by this many frames from its start counts as acquired promptly (the
+/// head-mounted acquisition target: within 5 frames on 95 % of segments).
+inline constexpr int kPromptAcquireFrames = 5;
 
 /// What runSuiteItem measured for one item.
 struct SuiteItemResult {
@@ -214,6 +217,7 @@ struct SuiteRow {
   double meanFramesToAcquire = 0;      ///< over auto items that acquired
   int maxFramesToAcquire = -1;         ///< over auto items that acquired; -1: none did
   int neverAcquired = 0;               ///< auto items that never acquired
+  int promptlyAcquired = 0;            ///< auto items acquired within kPromptAcquireFrames frames
   int cuts = 0;                        ///< cuts in the row's items
   double medianFramesToReacquire = 0;  ///< over all cuts, never = infinitely many
   int neverReacquired = 0;             ///< cuts never re-acquired

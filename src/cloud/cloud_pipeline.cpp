@@ -38,6 +38,11 @@ constexpr float kLimbEndMoveFactor = 0.5f;
 // that hand: the end lies at its fingertips, about 10 cm from the centre of a hand pointing away
 // from a head-mounted camera (an elbow taken for the hand puts it 30 cm or more away).
 constexpr float kHintLimbEndReach = 1.0f;
+// ... unless the end lies this much (m) nearer the camera than that centre while the hand's
+// surface is still there, apart from the limb: an arm seen along its length from a
+// head-mounted camera whose surface breaks at a steep wrist (the back of the hand turned away
+// from the camera) ends at the break, 10-15 cm in front of the hand.
+constexpr float kHintEndInFrontM = 0.10f;
 // A limb cut off by the sensor's near range is cut within this depth (m) of its nearest point.
 constexpr float kNearCutDepthM = 0.03f;
 // ... and nearer than this (m), or than kNearCutAboveRangeM beyond the sensor's near range
@@ -163,9 +168,11 @@ struct CloudPipeline::Impl {
   // One frame's search, shared by run()'s stages.
   struct Search {
     DepthGrid coarse;
-    GrownRegion first;                           // region 1's coarse volume
-    int firstSeed = -1;                          // its seed cell
-    bool hintTried = false;                      // keepToTheTrackedHand ran (first round only)
+    GrownRegion first;       // region 1's coarse volume
+    int firstSeed = -1;      // its seed cell
+    bool hintTried = false;  // keepToTheTrackedHand ran (first round only)
+    // keepToTheTrackedHand took the hint's volume over a limb end in front of it.
+    bool hintBehindEnd = false;
     int regionCount = 0;                         // coarse volumes accepted: 0, 1 or 2
     int minI = 0, maxI = 0, minJ = 0, maxJ = 0;  // their cell box
     // Each region's limb's free end, when haveHandEnd (region 2's with two regions).
@@ -202,10 +209,14 @@ struct CloudPipeline::Impl {
   //    when there is none.
   bool findCoarseRegions(Search& s);
   // The hint's volume in place of region 1 when region 1 (its limb's free end, if it is a
-  // limb) does not reach the hint (one hand); true when region 1 was grown again (from the
-  // hint's sample, or from its own seed when there is no volume there), so its limb end is
-  // to be found again.
+  // limb) does not reach the hint, or when that end lies kHintEndInFrontM in front of the hint
+  // with the hint's surface apart from the limb (one hand); true when region 1 was grown again
+  // (from the hint's sample, or from its own seed when there is no volume there), so its limb
+  // end is to be found again.
   bool keepToTheTrackedHand(Search& s);
+  // Whether a coarse sample lies within hintReachM of the hint's centre, off region 1 and off
+  // the surface the last limb search reached (the tracked hand, still there apart from it).
+  bool surfaceApartFromLimb(const Search& s) const;
   // 2. The filter box around the coarse volumes and the working resolution.
   void chooseBoxAndStride(Search& s) const;
   // With two regions, each coarse cell's region or a neighbour's (cells are sampled at their
@@ -494,8 +505,16 @@ bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
   }
   if (s.regionCount == 0) return false;
   s.haveHandEnd[0] = findLimbEnd(s.coarse, s.firstSeed, s.first, s.handEnd[0]);
-  if (keepToTheTrackedHand(s))
+  if (keepToTheTrackedHand(s)) {
     s.haveHandEnd[0] = findLimbEnd(s.coarse, s.firstSeed, s.first, s.handEnd[0]);
+    // The hand behind a limb end in front of it, seen apart from its arm (no limb end of its
+    // own): its sample is the limb's free end, so that the final ball moves onto it rather
+    // than staying on the nearest sample of the box, which is the arm's.
+    if (s.hintBehindEnd && !s.haveHandEnd[0]) {
+      s.haveHandEnd[0] = true;
+      s.handEnd[0] = s.coarse.point(k, s.firstSeed % s.coarse.width, s.firstSeed / s.coarse.width);
+    }
+  }
   s.haveHandEnd[1] = false;
   s.minI = s.first.minI;
   s.maxI = s.first.maxI;
@@ -526,6 +545,15 @@ bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
   return true;
 }
 
+bool CloudPipeline::Impl::surfaceApartFromLimb(const Search& s) const {
+  const DepthGrid& grid = s.coarse;
+  const int cell = coarseGrower.closestFreeCell(hint->centre);
+  if (cell < 0 || limbEnd.reached(cell)) return false;
+  const float reach = config.segmentation.hintReachM;
+  return (grid.point(k, cell % grid.width, cell / grid.width) - hint->centre).squaredNorm() <=
+         reach * reach;
+}
+
 bool CloudPipeline::Impl::keepToTheTrackedHand(Search& s) {
   const SegmentationConfig& seg = config.segmentation;
   if (hint == nullptr || s.hintTried || seg.hintReachM <= 0.0f || seg.secondRegionDepthBandM > 0.0f)
@@ -536,8 +564,11 @@ bool CloudPipeline::Impl::keepToTheTrackedHand(Search& s) {
   // A limb: the hand is at its free end (a forearm seen along its length holds the hand beyond
   // the ball, found there); the hint is within a few cm of the end when it is right.
   if (s.haveHandEnd[0] &&
-      (s.handEnd[0] - hint->centre).norm() <= kHintLimbEndReach * seg.handRadiusM)
-    return false;
+      (s.handEnd[0] - hint->centre).norm() <= kHintLimbEndReach * seg.handRadiusM) {
+    if (hint->centre.z() - s.handEnd[0].z() < kHintEndInFrontM || !surfaceApartFromLimb(s))
+      return false;
+    s.hintBehindEnd = true;
+  }
   // A hint on the volume (a tracker gone astray onto the forearm, say) changes nothing either.
   const std::vector<std::uint8_t>& labels = coarseGrower.labels();
   for (int j = s.first.minJ; j <= s.first.maxJ; ++j) {

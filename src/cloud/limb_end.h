@@ -34,6 +34,12 @@ class LimbEndFinder {
            float limbRadiusM, int borderMarginPixels, float nearCutDepthM,
            const std::uint8_t* planeCells = nullptr);
 
+  // Whether the last find() reached grid cell `cell` (on the limb's surface inside its ball).
+  bool reached(int cell) const {
+    return cell >= 0 && static_cast<std::size_t>(cell) < state_.size() &&
+           state_[static_cast<std::size_t>(cell)] != 0;
+  }
+
  private:
   // find's stages after the surface and its attachments are found. keepBodySide: of several
   // separate attachments (of any kind: the image border, the ball's edge, a near cut), the

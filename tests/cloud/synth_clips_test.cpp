@@ -586,5 +586,42 @@ TEST(CloudSynthClips, FingersReachingPastTheLimbsFreeEndAreSegmented) {
   EXPECT_EQ(leftOut, 0);
 }
 
+// animbank.pose frames 1380-1390 seen from a head-mounted camera, on a hand shaped unlike the
+// model: the forearm rises from the sensor's near range at the image bottom to a fist 50-55 cm
+// away, the back of the hand turned steeply from the camera. On 1384-1385 the surface breaks at
+// the wrist (neighbouring samples more than the step rule apart), so the limb search ends at
+// the break, 13-15 cm in front of the hand and within a hand radius of its centre, and the
+// segment is forearm only (0-3 % of its points within 12 cm of the hand's centre). Told where
+// the tracker has the hand (HandHint), the pipeline keeps to it: the end lies that far in front
+// of the hint while the hand's surface is still there, apart from the limb (kHintEndInFrontM,
+// src/cloud/cloud_pipeline.cpp). Elsewhere a third or more of the points are the hand's, the
+// rest the forearm seen along its length.
+TEST(CloudSynthClips, AFistBehindASteepWristIsKeptWhenTheLimbEndsInFrontOfIt) {
+  DYNAHAND_REQUIRE_SHARED_DATA(data);
+  int frames = 0;
+  int onForearm = 0;
+  forEachHeadMountedAnimbankFrame(
+      data, 1380, 1390, 1,
+      [&](int f, const synth::SyntheticFrame& frame, const CloudFrame& out, const Intrinsics&) {
+        Vec3 centre = Vec3::Zero();
+        for (const Vec3& p : frame.hands[0].keypoints) centre += p;
+        centre /= 21.0f;
+        int near = 0;
+        for (const Vec3& p : out.points) near += (p - centre).norm() <= 0.12f;
+        const float share = out.points.empty()
+                                ? 0.0f
+                                : static_cast<float>(near) / static_cast<float>(out.points.size());
+        ++frames;
+        if (share < 0.25f) {
+          ++onForearm;
+          std::printf("frame %d: %.0f%% of the points within 12 cm of the hand\n", f,
+                      100.0 * static_cast<double>(share));
+        }
+      });
+  if (HasFatalFailure()) return;
+  std::printf("%d of %d frames segmented mostly off the hand\n", onForearm, frames);
+  EXPECT_EQ(onForearm, 0);
+}
+
 }  // namespace
 }  // namespace dynahand

@@ -214,8 +214,11 @@ struct CloudPipeline::Impl {
   // (from the hint's sample, or from its own seed when there is no volume there), so its limb
   // end is to be found again.
   bool keepToTheTrackedHand(Search& s);
-  // Whether a coarse sample lies within hintReachM of the hint's centre, off region 1 and off
-  // the surface the last limb search reached (the tracked hand, still there apart from it).
+  // The free coarse cell closest to the hint's centre when it lies within hintReachM of it,
+  // else -1.
+  int hintSample(const DepthGrid& grid) const;
+  // Whether the hint's sample (hintSample) lies off the surface the last limb search reached
+  // (the tracked hand, still there apart from the limb).
   bool surfaceApartFromLimb(const Search& s) const;
   // 2. The filter box around the coarse volumes and the working resolution.
   void chooseBoxAndStride(Search& s) const;
@@ -545,13 +548,17 @@ bool CloudPipeline::Impl::findCoarseRegions(Search& s) {
   return true;
 }
 
-bool CloudPipeline::Impl::surfaceApartFromLimb(const Search& s) const {
-  const DepthGrid& grid = s.coarse;
+int CloudPipeline::Impl::hintSample(const DepthGrid& grid) const {
   const int cell = coarseGrower.closestFreeCell(hint->centre);
-  if (cell < 0 || limbEnd.reached(cell)) return false;
+  if (cell < 0) return -1;
   const float reach = config.segmentation.hintReachM;
-  return (grid.point(k, cell % grid.width, cell / grid.width) - hint->centre).squaredNorm() <=
-         reach * reach;
+  const Vec3 p = grid.point(k, cell % grid.width, cell / grid.width);
+  return (p - hint->centre).squaredNorm() <= reach * reach ? cell : -1;
+}
+
+bool CloudPipeline::Impl::surfaceApartFromLimb(const Search& s) const {
+  const int cell = hintSample(s.coarse);
+  return cell >= 0 && !limbEnd.reached(cell);
 }
 
 bool CloudPipeline::Impl::keepToTheTrackedHand(Search& s) {
@@ -581,11 +588,9 @@ bool CloudPipeline::Impl::keepToTheTrackedHand(Search& s) {
   // volume passed over before may hold it).
   const float coarseRadius = seg.handRadiusM * kCoarseRadiusFactor;
   coarseGrower.reset(grid, k);
-  const int seed = coarseGrower.closestFreeCell(hint->centre);
+  const int seed = hintSample(grid);
   bool taken = false;
-  if (seed >= 0 &&
-      (grid.point(k, seed % grid.width, seed / grid.width) - hint->centre).squaredNorm() <=
-          reach2) {
+  if (seed >= 0) {
     const GrownRegion r = coarseGrower.grow(seed, seg.step, coarseRadius, seg.minAreaM2);
     taken = r.areaM2 >= seg.minAreaM2 && !r.inFrontOfSurface;
     if (taken) {

@@ -441,6 +441,21 @@ TEST(CloudSynthClips, FingersGoingOutOfViewAtTheTopStayInTheSegment) {
   }
 }
 
+// The mean of hand 0's 21 keypoints in `frame`.
+Vec3 handCentre(const synth::SyntheticFrame& frame) {
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : frame.hands[0].keypoints) centre += p;
+  return centre / 21.0f;
+}
+
+// Share of the segmented points within radiusM (m) of centre; 0 when there are none.
+float shareOfPointsWithin(const CloudFrame& out, const Vec3& centre, float radiusM) {
+  if (out.points.empty()) return 0.0f;
+  int near = 0;
+  for (const Vec3& p : out.points) near += (p - centre).norm() <= radiusM;
+  return static_cast<float>(near) / static_cast<float>(out.points.size());
+}
+
 // animbank.pose around frame 1390 from the desk on active-stereo: the arm bent at the elbow, a
 // fist at the forearm's end, and the elbow nearer to the camera than the fist. The nearest
 // volume is the elbow, and the limb search's ball around it ends in the upper arm on one side
@@ -455,25 +470,16 @@ TEST(CloudSynthClips, AnElbowNearerThanTheTrackedFistIsNotTakenForTheHand) {
   ASSERT_TRUE(seq.ok()) << seq.error().message;
   CloudPipeline pipeline(seq->intrinsics());
   CloudFrame out;
-  // Share of the segmented points within 12 cm of the hand's centre.
-  const auto onHand = [&](const Vec3& centre) {
-    int near = 0;
-    for (const Vec3& p : out.points) near += (p - centre).norm() <= 0.12f;
-    return out.points.empty() ? 0.0f
-                              : static_cast<float>(near) / static_cast<float>(out.points.size());
-  };
   int elbowTaken = 0;
   for (int f = 0; f < options.frameCount; ++f) {
     const synth::SyntheticFrame& frame = seq->frame(f);
-    Vec3 centre = Vec3::Zero();
-    for (const Vec3& p : frame.hands[0].keypoints) centre += p;
-    centre /= 21.0f;
+    const Vec3 centre = handCentre(frame);
     ASSERT_TRUE(pipeline.process(frame.depth, out).ok());
-    const float nearest = onHand(centre);
+    const float nearest = shareOfPointsWithin(out, centre, 0.12f);
     // The hint a tracker would give: last frame's hand, here its truth 1 cm off.
     const HandHint hint{centre + Vec3(0.01f, 0.0f, 0.0f)};
     ASSERT_TRUE(pipeline.process(frame.depth, out, &hint).ok());
-    const float hinted = onHand(centre);
+    const float hinted = shareOfPointsWithin(out, centre, 0.12f);
     std::printf("frame %d: %.0f%% of the points on the hand nearest-first, %.0f%% hinted\n",
                 1386 + f, 100.0 * static_cast<double>(nearest),
                 100.0 * static_cast<double>(hinted));
@@ -603,14 +609,7 @@ TEST(CloudSynthClips, AFistBehindASteepWristIsKeptWhenTheLimbEndsInFrontOfIt) {
   forEachHeadMountedAnimbankFrame(
       data, 1380, 1390, 1,
       [&](int f, const synth::SyntheticFrame& frame, const CloudFrame& out, const Intrinsics&) {
-        Vec3 centre = Vec3::Zero();
-        for (const Vec3& p : frame.hands[0].keypoints) centre += p;
-        centre /= 21.0f;
-        int near = 0;
-        for (const Vec3& p : out.points) near += (p - centre).norm() <= 0.12f;
-        const float share = out.points.empty()
-                                ? 0.0f
-                                : static_cast<float>(near) / static_cast<float>(out.points.size());
+        const float share = shareOfPointsWithin(out, handCentre(frame), 0.12f);
         ++frames;
         if (share < 0.25f) {
           ++onForearm;

@@ -31,7 +31,7 @@ std::uint64_t seedValue(const py::object& seed) {
 // at the same speed.
 py::dict detectorData(const std::string& split, int count, const py::object& seed, int threads,
                       double proportionSpread, double heldObjectShare, bool heldObjectBoxes,
-                      double sharedCurlShare) {
+                      double sharedCurlShare, double headViewShare) {
   detect::DataOptions options;
   if (split == "train") {
     options.split = detect::DataSplit::Train;
@@ -50,6 +50,8 @@ py::dict detectorData(const std::string& split, int count, const py::object& see
     throw py::value_error("held_object_share must be in [0, 1]");
   if (!(sharedCurlShare >= 0.0 && sharedCurlShare <= 1.0))
     throw py::value_error("shared_curl_share must be in [0, 1]");
+  if (!(headViewShare >= 0.0 && headViewShare <= 1.0))
+    throw py::value_error("head_view_share must be in [0, 1]");
   options.count = count;
   options.seed = seedValue(seed);
   options.threads = threads;
@@ -57,6 +59,7 @@ py::dict detectorData(const std::string& split, int count, const py::object& see
   options.heldObjectShare = static_cast<float>(heldObjectShare);
   options.heldObjectBoxes = heldObjectBoxes;
   options.sharedCurlShare = static_cast<float>(sharedCurlShare);
+  options.headViewShare = static_cast<float>(headViewShare);
 
   constexpr py::ssize_t kSide = detect::kCropPixels, kPoints = detect::kKeypointCount;
   const py::ssize_t n = count;
@@ -106,10 +109,10 @@ void bindDetectorData(py::module_& m) {
   m.def("detector_data", &detectorData, py::arg("split") = "train", py::arg("count") = 1000,
         py::arg("seed") = 1, py::arg("threads") = 1, py::arg("proportion_spread") = 0.15,
         py::arg("held_object_share") = 0.15, py::arg("held_object_boxes") = false,
-        py::arg("shared_curl_share") = 0.3,
+        py::arg("shared_curl_share") = 0.3, py::arg("head_view_share") = 0.45,
         "The learned detector's synthetic training data as numpy arrays: the samples `dynahand "
         "detector data --split S --count N --seed SEED --proportion-spread P --held-object-share "
-        "H [--held-object-boxes] --shared-curl-share C` writes to its file "
+        "H [--held-object-boxes] --shared-curl-share C --head-view-share V` writes to its file "
         "(docs/formats/detector-data.md), value for value (sample i is a function of (split, "
         "seed, i) alone; the same for any threads). Returns a dict: pixels (N, 64, 64) uint8 "
         "(the crop; x in [-1, 1] is pixels / 127.5 - 1), uvd (N, 21, 3) float32 (keypoints in "

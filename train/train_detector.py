@@ -174,7 +174,8 @@ def import_dynahand(exe, module_dir=None):
 CACHE_CHECK = 64  # samples remade to check a cached file against the generator of today
 
 
-DEFAULT_SCENES = {"held_object_share": 0.15, "held_object_boxes": False, "shared_curl_share": 0.3}
+DEFAULT_SCENES = {"held_object_share": 0.15, "held_object_boxes": False, "shared_curl_share": 0.3,
+                  "head_view_share": 0.45}
 
 
 def make_file(dynahand, split, count, seed, path, threads, module, scenes=None):
@@ -188,6 +189,7 @@ def make_file(dynahand, split, count, seed, path, threads, module, scenes=None):
                         "--held-object-share", str(scenes["held_object_share"])]
                        + (["--held-object-boxes"] if scenes["held_object_boxes"] else [])
                        + ["--shared-curl-share", str(scenes["shared_curl_share"])]
+                       + ["--head-view-share", str(scenes["head_view_share"])]
                        + ["-o", path], check=True)
         return
     data = module.detector_data(split=split, count=count, seed=seed, threads=threads, **scenes)
@@ -284,6 +286,8 @@ def main():
                    help="training scenes: held objects may be boxes as well as balls and cylinders")
     p.add_argument("--shared-curl-share", type=float, default=DEFAULT_SCENES["shared_curl_share"],
                    help="training poses: share of the random poses whose fingers curl together")
+    p.add_argument("--head-view-share", type=float, default=DEFAULT_SCENES["head_view_share"],
+                   help="training views: share of draws seen as from a head-mounted camera")
     p.add_argument("--quick", action="store_true", help="a few steps on a small set (CI)")
     p.add_argument("--skip-if-no-torch", action="store_true",
                    help="exit 77 (CTest's skip) when python3-torch is not installed")
@@ -302,11 +306,13 @@ def main():
     rng = np.random.default_rng(a.seed)
 
     scenes = {"held_object_share": a.held_object_share, "held_object_boxes": a.held_object_boxes,
-              "shared_curl_share": a.shared_curl_share}
+              "shared_curl_share": a.shared_curl_share, "head_view_share": a.head_view_share}
     scene_tag = "" if scenes == DEFAULT_SCENES else \
         f"_o{a.held_object_share:g}{'b' if a.held_object_boxes else ''}" + \
         ("" if a.shared_curl_share == DEFAULT_SCENES["shared_curl_share"]
-         else f"_c{a.shared_curl_share:g}")
+         else f"_c{a.shared_curl_share:g}") + \
+        ("" if a.head_view_share == DEFAULT_SCENES["head_view_share"]
+         else f"_h{a.head_view_share:g}")
     train_path = os.path.join(work, f"train_{a.train_count}_s{a.seed}{scene_tag}.bin")
     held_path = os.path.join(work, f"heldback_{a.heldback_count}_s{a.seed + 1000}.bin")
     t0 = time.time()

@@ -64,6 +64,10 @@ const CommandRegistration kDetectorCommand{Command{
                         "share of random poses whose fingers curl together (a grasp)")
             ->capture_default_str()
             ->check(CLI::Range(0.0, 1.0));
+        app->add_option("--head-view-share", flags->data.headViewShare,
+                        "share of draws seen as from a head-mounted camera (forearm toward it)")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0, 1.0));
       }
       data->add_option("-o,--out", flags->out, "output file")->required();
       eval->add_option("--weights", flags->weights,

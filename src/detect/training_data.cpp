@@ -23,12 +23,11 @@ namespace {
 constexpr float kForearmPerLength = 1.4f;  // as the synthesiser: elbow beyond the image
 // Cosine of the least angle between the forearm (toward the elbow) and the line of sight.
 constexpr float kArmTowardCameraCos = 0.9f;
-// Share of draws seen as from a head-mounted camera: the forearm comes toward the camera, its
-// cosine to the line of sight at least kHeadViewCos (nine head-mounted frames in ten lie
-// there). With the uniform draws that land there too and the redraws below, 46 % of the
-// samples have the wrist-to-knuckle line at least that much toward the camera, against 23 %
-// with uniform rotations alone.
-constexpr float kHeadViewShare = 0.45f;
+// A head-mounted view (DataOptions::headViewShare of the draws): the forearm comes toward the
+// camera, its cosine to the line of sight at least kHeadViewCos (nine head-mounted frames in
+// ten lie there). At the default share, with the uniform draws that land there too and the
+// redraws below, 46 % of the samples have the wrist-to-knuckle line at least that much toward
+// the camera, against 23 % with uniform rotations alone.
 constexpr float kHeadViewCos = 0.3f;
 // Share of crops centred on the hand (its keypoint box centre, off by kCentreNoiseM per axis,
 // at most kCentreNoiseLimitM), as the tracker centres them once it has seen the hand; the rest
@@ -245,7 +244,7 @@ bool attempt(Worker& w, const DataOptions& o, Rng& rng, int index, DataSample& o
   // Any orientation whose forearm does not point straight at the camera: within 25 degrees of
   // it the arm would hide the hand. Forearms coming toward the camera (a head-mounted view, the
   // back of the hand seen over the arm) are included, and drawn more often than uniformly.
-  const float leastToward = chance(rng, kHeadViewShare) ? kHeadViewCos : -1.0f;
+  const float leastToward = chance(rng, o.headViewShare) ? kHeadViewCos : -1.0f;
   Quat rotation;
   for (int tries = 0;; ++tries) {
     rotation = randomRotation(rng);

@@ -149,21 +149,43 @@ TEST(DetectorData, SamplesAreDeterministicAndLabelledInsideTheCrop) {
 // A head-mounted camera sees the forearm come toward it in nine frames of ten of animbank.pose
 // (the wrist-to-knuckle line at least 0.3 in cosine toward the camera); uniform rotations put
 // 23 % of the samples there, the generator nearly half.
-TEST(DetectorData, NearlyHalfTheSamplesSeeTheForearmComeTowardTheCamera) {
-  DataOptions o;
-  o.seed = 11;
-  constexpr int kSamples = 160;
+// Share of the samples whose wrist-to-knuckle line comes toward the camera (the forearm
+// behind the hand, as a head-mounted camera sees it).
+double shareSeenAsFromTheHead(const DataOptions& o, int samples) {
   int toward = 0;
-  for (int i = 0; i < kSamples; ++i) {
+  for (int i = 0; i < samples; ++i) {
     const DataSample s = makeSample(o, i);
     const Vec3 forearm = (s.keypoints[0] - s.keypoints[9]).normalized();  // wrist side
     const Vec3 palm = 0.5f * (s.keypoints[0] + s.keypoints[9]);
     if (forearm.dot(-palm.normalized()) >= 0.3f) ++toward;
   }
-  const double share = static_cast<double>(toward) / kSamples;
+  return static_cast<double>(toward) / samples;
+}
+
+TEST(DetectorData, NearlyHalfTheSamplesSeeTheForearmComeTowardTheCamera) {
+  DataOptions o;
+  o.seed = 11;
+  const double share = shareSeenAsFromTheHead(o, 160);
   std::printf("forearm toward the camera in %.0f %% of the samples\n", 100.0 * share);
   EXPECT_GT(share, 0.35);
   EXPECT_LT(share, 0.65);
+}
+
+// headViewShare sets that share: none drawn as head-mounted leaves the uniform rotations' share
+// (about a quarter); all drawn so gives two thirds (segmentation redraws and wrist flex take
+// the rest out of that view).
+TEST(DetectorData, HeadViewShareSetsHowManySamplesSeeTheForearmComeToward) {
+  DataOptions none;
+  none.seed = 11;
+  none.headViewShare = 0.0f;
+  DataOptions all = none;
+  all.headViewShare = 1.0f;
+  const double uniform = shareSeenAsFromTheHead(none, 120);
+  const double head = shareSeenAsFromTheHead(all, 120);
+  std::printf("forearm toward the camera: %.0f %% (share 0), %.0f %% (share 1)\n", 100.0 * uniform,
+              100.0 * head);
+  EXPECT_LT(uniform, 0.35);
+  EXPECT_GT(head, 0.6);
 }
 
 // The held-object settings reach the generator: with share 0 the box setting changes no byte

@@ -78,9 +78,10 @@ def test_training_script_makes_the_same_file(tmp_path, monkeypatch):
     train_detector.generate(exe, "held-back", 20, 3, str(by_module), 2)
     assert by_module.read_bytes() == by_command.read_bytes()
     assert not list(tmp_path.glob("*.check"))
-    # The scene settings (--held-object-share, --held-object-boxes, --shared-curl-share) reach
-    # both generators.
-    scenes = {"held_object_share": 0.7, "held_object_boxes": True, "shared_curl_share": 0.9}
+    # The scene settings (--held-object-share, --held-object-boxes, --shared-curl-share,
+    # --head-view-share) reach both generators.
+    scenes = {"held_object_share": 0.7, "held_object_boxes": True, "shared_curl_share": 0.9,
+              "head_view_share": 0.8}
     objects_command, objects_module = tmp_path / "objects_command.bin", tmp_path / "objects_module.bin"
     train_detector.generate(exe, "train", 12, 4, str(objects_command), 2, None, scenes)
     train_detector.generate(exe, "train", 12, 4, str(objects_module), 2, dynahand, scenes)
@@ -140,6 +141,7 @@ def test_errors():
         (dict(held_object_share=1.5), "held_object_share must be in \\[0, 1\\]"),
         (dict(shared_curl_share=-0.1), "shared_curl_share must be in \\[0, 1\\]"),
         (dict(shared_curl_share=float("nan")), "shared_curl_share must be in"),
+        (dict(head_view_share=1.1), "head_view_share must be in \\[0, 1\\]"),
         (dict(seed=-1), "seed must be in \\[0, 2\\*\\*64\\) \\(got -1\\)"),
         (dict(seed=2**64), "seed must be in \\[0, 2\\*\\*64\\)"),
         (dict(seed=1.5), "seed must be an integer \\(got float\\)"),

@@ -245,8 +245,10 @@ struct Outputs {
 };
 
 Outputs openOutputs(const TrackOptions& o, const model::ArticulatedModel& hand,
-                    const std::optional<io::HandSizeRecord>& handSize, float framesPerSecond) {
+                    const std::optional<io::HandSizeRecord>& handSize, float framesPerSecond,
+                    int firstFrame) {
   io::JsonOptions json;
+  json.firstFrame = firstFrame;  // the files number frames as the input does
   json.handSize = handSize;
   json.candidates = o.candidates;
   json.candidatePoses = o.candidates;
@@ -380,7 +382,7 @@ int runTrack(const TrackOptions& o) {
     if (!s) throw std::runtime_error("--init " + o.init + ": " + s.message());
   }
 
-  Outputs outputs = openOutputs(o, *hand, handSize, info.framesPerSecond);
+  Outputs outputs = openOutputs(o, *hand, handSize, info.framesPerSecond, first);
   const TrackTally tally = trackFrames(o, in, **tracker, head, first, last, outputs);
   if (Status s = outputs.close(o.bvh); !s) throw std::runtime_error(s.message());
   printSummary(o, handSize, first, tally, info.hasGroundTruth);

@@ -46,6 +46,9 @@ struct JsonOptions {
   bool openxr = true;                      ///< the 26 OpenXR joints
   bool candidates = false;      ///< every simulation's error (and, with candidatePoses, poses)
   bool candidatePoses = false;  ///< with candidates: each simulation's body poses
+  /// The input's index of the tracker's first frame: the frame numbers written are
+  /// TrackResult::frame plus this (`dynahand track --start N` tracks from input frame N).
+  int firstFrame = 0;
 };
 
 /// One frame as a single-line JSON object (no trailing newline). model: the tracked model,

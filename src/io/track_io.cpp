@@ -186,7 +186,7 @@ std::string trackResultToJson(const track::TrackResult& r, const model::Articula
   std::string s;
   s.reserve(4096);
   fmt::format_to(std::back_inserter(s), "{{\"version\":{},\"frame\":{},\"time_ms\":{:.3f},",
-                 kTrackFormatVersion, r.frame, r.timeMs);
+                 kTrackFormatVersion, r.frame + o.firstFrame, r.timeMs);
   if (o.handSize) appendHandSize(s, *o.handSize);
   s += "\"hands\":[";
   for (std::size_t h = 0; h < r.hands.size(); ++h) {
@@ -242,9 +242,9 @@ Status TrackWriter::write(const track::TrackResult& r) {
     pendingLines_ = 0;
   } else {
     for (const auto& hand : r.hands) {
-      std::string row =
-          fmt::format("{},{:.3f},{},{},{:.6g},{}", r.frame, r.timeMs, sideName(hand.side),
-                      hand.tracked ? 1 : 0, hand.error, track::strategyName(hand.simulation));
+      std::string row = fmt::format("{},{:.3f},{},{},{:.6g},{}", r.frame + options_.firstFrame,
+                                    r.timeMs, sideName(hand.side), hand.tracked ? 1 : 0, hand.error,
+                                    track::strategyName(hand.simulation));
       for (const Vec3& k : hand.keypoints21) {
         if (hand.tracked) {
           fmt::format_to(std::back_inserter(row), ",{:.6g},{:.6g},{:.6g}", k.x(), k.y(), k.z());

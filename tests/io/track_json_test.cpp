@@ -60,6 +60,16 @@ TEST(TrackJson, HasTheDocumentedFields) {
   EXPECT_FALSE(j.contains("hand_size"));  // only when the writer is told the size
 }
 
+// A tracker started at input frame 100 (dynahand track --start 100) numbers its frames from 0;
+// the file numbers them as the input does.
+TEST(TrackJson, FramesAreNumberedAsInTheInput) {
+  const auto hand = model::makeDefaultHand();
+  JsonOptions o;
+  o.firstFrame = 100;
+  const auto j = nlohmann::json::parse(trackResultToJson(sampleResult(hand, 3, true), hand, o));
+  EXPECT_EQ(j["frame"], 103);
+}
+
 TEST(TrackJson, EstimatedHandSizeHasItsSourceFramesFitAndMetacarpals) {
   const auto hand = model::makeDefaultHand();
   JsonOptions o;

@@ -235,9 +235,9 @@ std::vector<ClipDefinition> makeClips() {
   c.push_back({{"push-forward", "fist pushing 13 cm forward and staying there", 2.6f, 1},
                {{key(0.0f, fist(), Vec3(0, 0, -0.03f)), key(0.4f, fist(), Vec3(0, 0, -0.03f)),
                  key(1.6f, fist(), Vec3(0, 0, 0.1f)), key(2.4f, fist(), Vec3(0, 0, 0.1f))}}});
-  // Sideways: the tracker follows a fist moving across its forearm (5.8 mm mean keypoint error
-  // with --init gt) much better than along it (push-forward: 46 mm; it holds the forearm along
-  // its own axis, see TrackerSettings::forearmHoldForce).
+  // Sideways: a fist moving across its forearm, where push-forward moves it along the forearm's
+  // own axis (the two directions the forearm's hold, TrackerSettings::forearmHoldForce, treats
+  // differently).
   c.push_back({{"push-sideways",
                 "fist pushing 13 cm sideways, little finger first, and staying there", 2.6f, 1},
                {{key(0.0f, fist(), Vec3(0.03f, 0, 0)), key(0.4f, fist(), Vec3(0.03f, 0, 0)),

@@ -118,12 +118,13 @@ TEST(HandSize, EstimatesTheMetacarpalsOfAHandShapedUnlikeTheModel) {
   EXPECT_EQ(s->dimensions.length, e->dimensions.length);
 }
 
-// Without start keypoints on captured motion (animbank.pose, tof, the default hand's size, two
+// Without start keypoints on captured motion (animbank.pose, tof, the default hand's size, three
 // segments that start in no open hand facing the camera and show the palm): the candidates
 // start from the keypoints the tracker with the learned detector reports once it has the hand.
-// Acquiring by themselves (the detector off) each took the hand its own way, and the lengths
-// came out 15-23 % off (a third such segment, frame 600, comes out 10 % short with it). Another
-// segment shows the back of the hand: the size from the detected palm.
+// With the shipped weights the lengths come out 98.8 / 103.2 / 89.9 % of the truth (frames 600 /
+// 1200 / 1800); acquiring by themselves (the detector off) each candidate takes the hand its own
+// way: 87.9 / 110.3 / 120.7 %. Another segment shows the back of the hand: the size from the
+// detected palm.
 TEST(HandSize, EstimatesWithoutStartKeypointsOnCapturedMotion) {
   DYNAHAND_REQUIRE_SHARED_DATA(data);
   const model::HandDimensions truth{};
@@ -145,23 +146,33 @@ TEST(HandSize, EstimatesWithoutStartKeypointsOnCapturedMotion) {
   EXPECT_EQ(fromPalm->candidates, 1);
   expectNear(fromPalm->dimensions.length, truth.length, "length from behind");
   expectNear(fromPalm->dimensions.width, truth.width, "width from behind");
-  for (const int start : {1200, 1800}) {
+  double lengthErrorSum = 0.0;
+  constexpr int kSegments = 3;
+  for (const int start : {600, 1200, 1800}) {
     const std::vector<DepthFrame> frames = framesFrom(start, intrinsics);
     o.tracker.detector.enabled = true;
     auto detected = estimateHandSize(frames, intrinsics, std::nullopt, o);
     ASSERT_TRUE(detected) << detected.message();
+    const double lengthRatio = static_cast<double>(detected->dimensions.length / truth.length);
+    std::printf("frame %d: length %.1f %% of the truth, width %.1f %%\n", start,
+                100.0 * lengthRatio,
+                100.0 * static_cast<double>(detected->dimensions.width / truth.width));
+    lengthErrorSum += std::abs(lengthRatio - 1.0);
     EXPECT_EQ(detected->candidates, 13) << "frame " << start << ": the candidates' search";
-    EXPECT_NEAR(detected->dimensions.length / truth.length, 1.0f, 0.08f)
+    EXPECT_NEAR(lengthRatio, 1.0, 0.11)
         << "frame " << start << ": " << detected->dimensions.length << " m";
     EXPECT_NEAR(detected->dimensions.width / truth.width, 1.0f, 0.11f)
         << "frame " << start << ": " << detected->dimensions.width << " m";
     o.tracker.detector.enabled = false;
     auto byThemselves = estimateHandSize(frames, intrinsics, std::nullopt, o);
     ASSERT_TRUE(byThemselves) << byThemselves.message();
-    EXPECT_LT(std::abs(detected->dimensions.length / truth.length - 1.0f),
-              std::abs(byThemselves->dimensions.length / truth.length - 1.0f))
+    std::printf("frame %d, the detector off: length %.1f %% of the truth\n", start,
+                100.0 * static_cast<double>(byThemselves->dimensions.length / truth.length));
+    EXPECT_LT(std::abs(lengthRatio - 1.0),
+              std::abs(static_cast<double>(byThemselves->dimensions.length / truth.length) - 1.0))
         << "frame " << start << ": " << byThemselves->dimensions.length << " m";
   }
+  EXPECT_LT(lengthErrorSum / kSegments, 0.06) << "the length's mean error over the segments";
 }
 
 // A given length is kept; the width alone is searched.

@@ -47,8 +47,9 @@ TEST(RealData, OpenPalmFramesAreAcquiredAndTheModelLiesOnTheHand) {
     framesWithATipOff += h.quality.fingertipsOffHand > 0 ? 1 : 0;
   }
   ASSERT_GT(acquired, 0);
-  // With the shipped detector the fitted start wins frame 6 with the thumb's tip just past the
-  // mask's edge (the rest of the model on the hand, 0.91 of it); one such frame at most.
+  // With the shipped detector no frame has a fingertip off the hand (model on hand 0.96-0.99
+  // per frame); one frame with a tip just past the mask's edge, the rest of the model on the
+  // hand, is allowed.
   EXPECT_LE(framesWithATipOff, 1);
   EXPECT_GE(nearSum / static_cast<float>(acquired), 0.85f);
 }

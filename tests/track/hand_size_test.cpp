@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <iterator>
 #include <vector>
 
 #include "dynahand/hand_size.h"
@@ -147,8 +149,8 @@ TEST(HandSize, EstimatesWithoutStartKeypointsOnCapturedMotion) {
   expectNear(fromPalm->dimensions.length, truth.length, "length from behind");
   expectNear(fromPalm->dimensions.width, truth.width, "width from behind");
   double lengthErrorSum = 0.0;
-  constexpr int kSegments = 3;
-  for (const int start : {600, 1200, 1800}) {
+  constexpr int kStarts[] = {600, 1200, 1800};
+  for (const int start : kStarts) {
     const std::vector<DepthFrame> frames = framesFrom(start, intrinsics);
     o.tracker.detector.enabled = true;
     auto detected = estimateHandSize(frames, intrinsics, std::nullopt, o);
@@ -172,7 +174,8 @@ TEST(HandSize, EstimatesWithoutStartKeypointsOnCapturedMotion) {
               std::abs(static_cast<double>(byThemselves->dimensions.length / truth.length) - 1.0))
         << "frame " << start << ": " << byThemselves->dimensions.length << " m";
   }
-  EXPECT_LT(lengthErrorSum / kSegments, 0.06) << "the length's mean error over the segments";
+  EXPECT_LT(lengthErrorSum / static_cast<double>(std::size(kStarts)), 0.06)
+      << "the length's mean error over the segments";
 }
 
 // A given length is kept; the width alone is searched.

@@ -226,12 +226,32 @@ track::HandSizeEstimate estimateHandSizePy(const py::object& frames, const py::o
 
 // ---- tracker -------------------------------------------------------------------------------
 
+// Tracker(settings={"detector.selectionWeight": 0, ...}): TrackerSettings fields by the names
+// `dynahand settings` lists (track::setTrackerSetting), as `dynahand track --set` takes them.
+void applySettingsByName(const py::object& byName, track::TrackerSettings& settings) {
+  if (byName.is_none()) return;
+  if (!py::isinstance<py::dict>(byName))
+    throw py::type_error("settings must be a dict of setting name -> number or bool");
+  for (const auto& [key, value] : byName.cast<py::dict>()) {
+    if (!py::isinstance<py::str>(key)) throw py::type_error("settings: names must be strings");
+    std::string text;
+    if (py::isinstance<py::bool_>(value))
+      text = value.cast<bool>() ? "true" : "false";
+    else if (py::isinstance<py::int_>(value) || py::isinstance<py::float_>(value))
+      text = py::str(value).cast<std::string>();
+    else
+      throw py::type_error("settings['" + key.cast<std::string>() + "']: a number or a bool");
+    const Status set = track::setTrackerSetting(settings, key.cast<std::string>(), text);
+    if (!set) throw py::value_error("settings: " + set.message());
+  }
+}
+
 class PyTracker {
  public:
   PyTracker(const py::object& camera, int hands, const py::object& handSize,
             const py::object& detector, int threads, bool perFrame, std::optional<double> fps,
             const py::object& modelFile, const py::object& frames, int handSizeFrames,
-            bool behindUser) {
+            bool behindUser, const py::object& settingsByName) {
     const CameraSpec spec = cameraSpec(camera);
     intrinsics_ = spec.intrinsics;
     fps_ = fps ? *fps : spec.fps.value_or(30.0);
@@ -298,6 +318,7 @@ class PyTracker {
     } else {
       settings.detector.weights = existingPath(detector, "detector").string();
     }
+    applySettingsByName(settingsByName, settings);
     if (autoSize) {
       // As `dynahand track --hand-size auto`: the first frames read ahead, the size estimated
       // from them, the built-in hand of that size; tracking then starts afresh at frame 0.
@@ -545,12 +566,13 @@ void bindTracker(py::module_& m) {
                         "model, settings and learned detector, so the same results frame by "
                         "frame).")
       .def(py::init<const py::object&, int, const py::object&, const py::object&, int, bool,
-                    std::optional<double>, const py::object&, const py::object&, int, bool>(),
+                    std::optional<double>, const py::object&, const py::object&, int, bool,
+                    const py::object&>(),
            py::arg("camera"), py::arg("hands") = 1, py::arg("hand_size") = py::none(),
            py::arg("detector") = true, py::arg("threads") = 1, py::arg("per_frame") = false,
            py::arg("fps") = py::none(), py::arg("model_file") = py::none(),
            py::arg("frames") = py::none(), py::arg("hand_size_frames") = kDefaultSizeFrames,
-           py::arg("behind_user") = false,
+           py::arg("behind_user") = false, py::arg("settings") = py::none(),
            "camera: a Camera, a dict (width, height, fx, fy, cx, cy[, fps][, min_range_m]) or a "
            "Sequence / SyntheticClip (its camera, fps and near range: min_range_m, m, tells the "
            "segmentation where the sensor cuts off an arm reaching past it).\n"
@@ -566,7 +588,8 @@ void bindTracker(py::module_& m) {
            "False, or an ONNX file. threads: threads for a frame's simulations (and the size "
            "estimate's candidates; results identical for any count). per_frame: acquire every "
            "frame afresh. fps: frame rate for default timestamps (default: the camera's, else "
-           "30).")
+           "30). settings: {name: value} of tracker settings by the names `dynahand settings` "
+           "lists (e.g. {'detector.selectionWeight': 0}), as `dynahand track --set`.")
       .def("track", &PyTracker::track, py::arg("depth"), py::arg("depth_scale") = 0.001f,
            py::arg("timestamp") = py::none(),
            "Tracks one (H, W) uint16 depth frame (metres = value * depth_scale; 0 = no data). "

@@ -134,8 +134,11 @@ class Tracker:
         frames: Optional[_FramesLike] = None,
         hand_size_frames: int = 30,
         behind_user: bool = False,
+        settings: Optional[dict[str, Union[float, int, bool]]] = None,
     ) -> None:
-        """hand_size: None (0.19, 0.085), (length, width) in m, a HandSize
+        """settings: tracker settings by the names `dynahand settings` lists
+        ({"detector.selectionWeight": 0}), as `dynahand track --set` takes them.
+        hand_size: None (0.19, 0.085), (length, width) in m, a HandSize
         (estimate_hand_size()), or "auto": estimated as `dynahand track --hand-size auto` from
         the first hand_size_frames (10..600) frames of `frames` (default: camera, when it is a
         Sequence or SyntheticClip) before anything is tracked; track() then starts at frame 0.

@@ -38,6 +38,8 @@ struct BenchOptions {
   bool handSizeOnly = false;           // with auto: the size alone
   std::string rows;                    // only the items whose row label contains this (empty: all)
   bool items = false;                  // one line per item after each table
+  std::vector<std::string> set;        // --set NAME=VALUE: every item's tracker settings
+  std::vector<std::string> disable;    // --disable SIMULATION...: off on every item
   // --suite soak
   double minutes = 0.0;   // default: 60 (track), 15 (--serve)
   std::string soakInput;  // default: soak.h's
@@ -210,6 +212,8 @@ std::vector<eval::SuiteItem> asAsked(std::vector<eval::SuiteItem> items, const B
   }
   if (o.noDetector)
     for (eval::SuiteItem& item : items) item.tracker.detector.enabled = false;
+  for (eval::SuiteItem& item : items) applyTrackerSettings(o.set, item.tracker);
+  for (eval::SuiteItem& item : items) disableSimulations(o.disable, item.tracker);
   if (o.keypointsFromTruthMm >= 0.0f)
     for (eval::SuiteItem& item : items) item.truthKeypointsNoiseM = 0.001f * o.keypointsFromTruthMm;
   if (!o.trueShape.empty())
@@ -262,6 +266,8 @@ int runBench(const BenchOptions& o, const std::string& commandLine) {
   if (o.suite != "soak" && soakOptions)
     throw UsageError("--minutes, --soak-input, --serve and --paced go with --suite soak");
   if (o.paced && !o.serve) throw UsageError("--paced goes with --serve");
+  if (o.suite == "soak" && (!o.set.empty() || !o.disable.empty()))
+    throw UsageError("--set and --disable go with --suite motion, standard or all");
   if (o.suite == "soak") return runSoakBench(o, commandLine);
   const bool motion = o.suite != "standard", standard = o.suite != "motion";
   const std::string machineBefore = machineLine();
@@ -378,6 +384,10 @@ const CommandRegistration kBenchCommand{Command{
       sub.add_flag("--items", o->items,
                    "after each table, one line per item: its row, clip or segment, mean and "
                    "p95 error and share of frames with every joint within 30 mm");
+      addTrackerSettingOption(sub, o->set);
+      sub.add_option("--disable", o->disable,
+                     "simulations to switch off on every item: normal, gross_motion, grasp_bias, "
+                     "finger_flip, feature_detection, detector_fit");
       sub.add_option("--minutes", o->minutes,
                      "soak: how long (default 60; 15 with --serve; fractions allowed)")
           ->check(CLI::Range(0.01, 10000.0));
@@ -402,6 +412,7 @@ const CommandRegistration kBenchCommand{Command{
           "  dynahand bench --suite motion --data ../shared/data --markdown /tmp/motion.md\n"
           "  dynahand bench --suite motion --threads 2 --no-detector   # without the detector\n"
           "  dynahand bench --suite motion --rows 'held objects' --threads 2\n"
+          "  dynahand bench --suite motion --rows 'tof / ' --set detector.selectionWeight=0\n"
           "  dynahand bench --quick --markdown /tmp/bench.md\n"
           "  dynahand bench --suite soak --minutes 60 --markdown /tmp/soak-track.md\n"
           "  dynahand bench --suite soak --serve --minutes 15 --markdown /tmp/soak-serve.md");
@@ -419,6 +430,8 @@ const CommandRegistration kBenchCommand{Command{
         if (o->handSizeOnly) line += " --hand-size-only";
         if (!o->rows.empty()) line += " --rows '" + o->rows + "'";
         if (o->items) line += " --items";
+        for (const std::string& a : o->set) line += " --set " + a;
+        for (const std::string& d : o->disable) line += " --disable " + d;
         if (o->minutes > 0.0) line += fmt::format(" --minutes {}", o->minutes);
         if (!o->soakInput.empty()) line += " --soak-input " + o->soakInput;
         if (o->serve) line += " --serve";

@@ -31,8 +31,9 @@ struct TrackOptions {
   bool perFrame = false, candidates = false;
   bool behindUser = false;  // --behind-user: two hands, camera worn or behind the user
   std::vector<std::string> disable;
-  bool noDetector = false;  // --no-detector
-  std::string detector;     // --detector FILE (empty: the shipped weights)
+  bool noDetector = false;       // --no-detector
+  std::string detector;          // --detector FILE (empty: the shipped weights)
+  std::vector<std::string> set;  // --set NAME=VALUE, applied last
 };
 
 // camera:N opens the N-th camera DepthCamera::list() finds; camera:BACKEND[:ID] a given one.
@@ -121,16 +122,8 @@ track::TrackerSettings trackerSettings(const TrackOptions& o, const SequenceInfo
   if (info.minRangeM > 0.0f) settings.cloud.segmentation.sensorMinRangeM = info.minRangeM;
   if (o.noDetector && !o.detector.empty())
     throw UsageError("--detector and --no-detector are exclusive");
-  for (const auto& name : o.disable) {
-    bool found = false;
-    for (int k = 0; k < track::kStrategyCount; ++k) {
-      if (name == track::strategyName(static_cast<track::StrategyKind>(k))) {
-        settings.strategies[static_cast<std::size_t>(k)] = false;
-        found = true;
-      }
-    }
-    if (!found) throw UsageError("--disable: unknown simulation '" + name + "'");
-  }
+  disableSimulations(o.disable, settings);
+  applyTrackerSettings(o.set, settings);
   return settings;
 }
 
@@ -354,6 +347,10 @@ void printSummary(const TrackOptions& o, const std::optional<io::HandSizeRecord>
 }
 
 int runTrack(const TrackOptions& o) {
+  {
+    track::TrackerSettings names;  // a bad --set is reported before any input is opened
+    applyTrackerSettings(o.set, names);
+  }
   FrameInput in = openInput(o);
   const SequenceInfo& info = in.info;
   if (o.sizeOnly && o.handSize != "auto")
@@ -371,8 +368,9 @@ int runTrack(const TrackOptions& o) {
 
   auto tracker = track::Tracker::create(*hand, info.intrinsics, settings);
   if (!tracker) {
-    // The hand model is checked already (handModel); what is left is the detector's weights.
-    if (detectorWeightsGiven(o.detector)) throw UsageError(tracker.message());
+    // The hand model is checked already (handModel); what is left is the detector's weights
+    // and the settings --set gave.
+    if (detectorWeightsGiven(o.detector) || !o.set.empty()) throw UsageError(tracker.message());
     throw std::runtime_error(tracker.message());
   }
   if (start.pose && !(handSize && handSize->estimated)) {
@@ -443,11 +441,13 @@ const CommandRegistration kTrackCommand{Command{
                      "models/detector/detector.onnx, or $DYNAHAND_DETECTOR)");
       sub.add_flag("--no-detector", o->noDetector,
                    "track without the learned detector (the paper's simulations only)");
+      addTrackerSettingOption(sub, o->set);
       sub.footer(
           "Examples:\n"
           "  dynahand track clip/ --out poses.jsonl\n"
           "  dynahand track clip/ --init gt --out poses.jsonl --bvh hand.bvh\n"
           "  dynahand track clip/ --hand-size auto --out poses.jsonl\n"
+          "  dynahand track clip/ --init gt --set detector.selectionWeight=0\n"
           "  dynahand track clip/ --out hand.pose\n"
           "  dynahand track camera:0 --out live.jsonl\n"
           "  dynahand track ../shared/data/sr305-hands/20210326-230536 --per-frame --out "

@@ -24,6 +24,33 @@ void addHandModelOptions(CLI::App& sub, HandModelOptions& o, bool withModelFile)
           ->check(CLI::Range(0.05f, 0.15f));
 }
 
+void addTrackerSettingOption(CLI::App& sub, std::vector<std::string>& assignments) {
+  sub.add_option("--set", assignments,
+                 "NAME=VALUE: a tracker setting by name, e.g. detector.selectionWeight=0 "
+                 "(repeatable; 'dynahand settings' lists them with their defaults)")
+      ->take_all()
+      ->allow_extra_args(false);
+}
+
+void applyTrackerSettings(const std::vector<std::string>& assignments,
+                          track::TrackerSettings& settings) {
+  for (const std::string& a : assignments)
+    if (const Status s = track::setTrackerSetting(settings, a); !s)
+      throw UsageError("--set: " + s.message());
+}
+
+void disableSimulations(const std::vector<std::string>& names, track::TrackerSettings& settings) {
+  for (const std::string& name : names) {
+    int kind = 0;
+    while (kind < track::kStrategyCount &&
+           name != track::strategyName(static_cast<track::StrategyKind>(kind)))
+      ++kind;
+    if (kind == track::kStrategyCount)
+      throw UsageError("--disable: unknown simulation '" + name + "'");
+    settings.strategies[static_cast<std::size_t>(kind)] = false;
+  }
+}
+
 model::ArticulatedModel handModel(const HandModelOptions& o) {
   if (o.modelFile.empty()) return model::makeDefaultHand({o.length, o.width});
   auto loaded = model::loadModel(o.modelFile);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "dynahand/model.h"
+#include "dynahand/tracker.h"
 
 namespace dynahand::cli {
 
@@ -49,6 +50,17 @@ void requireFiniteFloats(CLI::App& app);
 // Whether the user chose the detector weights (--detector FILE, or DYNAHAND_DETECTOR): then
 // weights that do not load are bad input (kExitUsage), otherwise a broken installation.
 bool detectorWeightsGiven(const std::string& detectorOption);
+
+// --set NAME=VALUE (repeatable): TrackerSettings fields by name (track::setTrackerSetting;
+// `dynahand settings` lists them), applied after the command's own options.
+void addTrackerSettingOption(CLI::App& sub, std::vector<std::string>& assignments);
+// Applies them in order; an unknown name or a bad value is a UsageError naming it.
+void applyTrackerSettings(const std::vector<std::string>& assignments,
+                          track::TrackerSettings& settings);
+
+// --disable SIMULATION...: each named simulation (track::strategyName) off; an unknown name is
+// a UsageError naming it.
+void disableSimulations(const std::vector<std::string>& names, track::TrackerSettings& settings);
 
 // --model / --hand-length / --hand-width: the hand model a recording is (or was) tracked with.
 struct HandModelOptions {

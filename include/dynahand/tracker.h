@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "dynahand/cloud.h"
@@ -203,6 +204,22 @@ struct TrackerSettings {
   /// and the tracking results are the same bits either way.
   bool keepCandidates = false;
 };
+
+/// One TrackerSettings field settable by name (setTrackerSetting).
+struct NamedSetting {
+  std::string name;         ///< dotted as the docs write it: "detector.selectionWeight"
+  std::string value;        ///< its value in the settings listed, as text
+  std::string description;  ///< what it is, with its unit
+};
+/// Sets the TrackerSettings field `name` (dotted as the docs write it: "substeps",
+/// "detector.selectionWeight", "cloud.segmentation.handRadiusM"; namedSettings() lists them)
+/// from text: a number, or true / false (1 / 0). An unknown name or a value of the wrong kind
+/// is an error naming both; ranges are checked where the settings are used (Tracker::create).
+Status setTrackerSetting(TrackerSettings& settings, std::string_view name, std::string_view value);
+/// The same from "NAME=VALUE" (`dynahand track --set`, `dynahand bench --set`).
+Status setTrackerSetting(TrackerSettings& settings, std::string_view assignment);
+/// Every setting setTrackerSetting takes, in the docs' order, with its value in `settings`.
+std::vector<NamedSetting> namedSettings(const TrackerSettings& settings = {});
 
 /// How well the fitted hand explains the data (beyond the paper's metric):
 struct FitQuality {

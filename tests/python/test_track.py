@@ -126,3 +126,31 @@ def test_two_hands_seen_from_the_head():
         assert hands[h].side == side and hands[h].tracked
         error = np.linalg.norm(hands[h].keypoints21 - clip.ground_truth(11, hand=h), axis=1)
         assert error.mean() < 0.05, (side, error.mean())
+
+
+def test_settings_by_name_track_as_the_command_sets_them(clip, tmp_path):
+    # Tracker(settings=...) takes the names `dynahand track --set` takes, with the same effect.
+    out = tmp_path / "set.jsonl"
+    run("track", clip, "--init", "gt", "--no-detector", "--set", "substeps=1",
+        "--set", "detector.reportBlend=0", "--out", out)
+    lines = out.read_text().splitlines()
+    seq = dynahand.open_sequence(clip)
+    tracker = dynahand.Tracker(seq, detector=False,
+                               settings={"substeps": 1, "detector.reportBlend": 0.0})
+    tracker.initialize(seq.ground_truth(0))
+    for i in range(10):
+        depth, scale, _ = seq[i]
+        check_same(tracker.track(depth, scale), tracker, lines[i])
+    # The setting acts: one physics step a frame tracks otherwise than the default two.
+    default = tmp_path / "default.jsonl"
+    run("track", clip, "--init", "gt", "--no-detector", "--out", default)
+    assert without_time(default.read_text()) != without_time(out.read_text())
+    for bad, message in [({"detector.noSuchThing": 1}, "unknown tracker setting"),
+                         ({"substeps": 1.5}, "not a whole number"),
+                         ({"perFrame": "yes"}, "a number or a bool")]:
+        try:
+            dynahand.Tracker(seq, detector=False, settings=bad)
+        except (ValueError, TypeError) as e:
+            assert message in str(e)
+        else:
+            raise AssertionError(f"settings={bad} accepted")

@@ -262,6 +262,26 @@ def evaluate(model, pixels, uvd, batch=512):
     return float(torch.cat(errors).mean()) * HALF_CROP_MM
 
 
+def card_figures(dynahand, onnx_path, quick=False):
+    """The model card's figures: the C++ side's `detector eval` on a fixed held-back set (what
+    KeypointDetector.ShippedWeightsReproduceTheirModelCard reproduces); a few samples when
+    quick."""
+    eval_args = ["--split", "held-back", "--count", "300" if not quick else "32", "--seed", "7"]
+    measured = json.loads(subprocess.run([dynahand, "detector", "eval", "--weights", onnx_path]
+                                         + eval_args, check=True, capture_output=True,
+                                         text=True).stdout)
+    return {"eval_args": eval_args, "mean_mm": measured["mean_mm"],
+            "p95_mm": measured["p95_mm"], "mean_confidence": measured["mean_confidence"]}
+
+
+def write_card(out, card):
+    """OUT/detector.json; prints the figures."""
+    with open(os.path.join(out, "detector.json"), "w") as f:
+        json.dump(card, f, indent=2)
+        f.write("\n")
+    print(json.dumps(card["figures"]))
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--dynahand", required=True, help="the dynahand command (generates the data)")
@@ -361,11 +381,6 @@ def main():
     onnx_path = os.path.join(a.out, "detector.onnx")
     torch.onnx.export(model, torch.ones(1, 1, CROP, CROP), onnx_path, opset_version=11,
                       input_names=["crop"], output_names=["keypoints"])
-    # The C++ side's figures on a fixed held-back set (what tests reproduce).
-    eval_args = ["--split", "held-back", "--count", "300" if not a.quick else "32", "--seed", "7"]
-    measured = json.loads(subprocess.run([a.dynahand, "detector", "eval", "--weights", onnx_path]
-                                         + eval_args, check=True, capture_output=True,
-                                         text=True).stdout)
     card = {
         "format": "dynahand-detector-card", "version": 1,
         "input": [1, 1, CROP, CROP], "output": KEYPOINTS * 4, "parameters": params,
@@ -377,8 +392,7 @@ def main():
                      "torch": torch.__version__},
         "held_back": {"samples": a.heldback_count, "seed": a.seed + 1000,
                       "mean_mm_approx": round(held_mm, 2)},
-        "figures": {"eval_args": eval_args, "mean_mm": measured["mean_mm"],
-                    "p95_mm": measured["p95_mm"], "mean_confidence": measured["mean_confidence"]},
+        "figures": card_figures(a.dynahand, onnx_path, a.quick),
     }
     if a.init:
         # The run this one fine-tuned, from the card beside its weights: a fine-tuned network's
@@ -389,10 +403,7 @@ def main():
                 base = json.load(f)
             card["training"]["base"] = {"training": base.get("training"),
                                         "figures": base.get("figures")}
-    with open(os.path.join(a.out, "detector.json"), "w") as f:
-        json.dump(card, f, indent=2)
-        f.write("\n")
-    print(json.dumps(card["figures"]))
+    write_card(a.out, card)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <numbers>
 #include <random>
 
@@ -42,21 +43,34 @@ detect::DetectedKeypoints truthMovedBy(const Keypoints21& truth, const Vec3& off
   return detection;
 }
 
+// How trackMeanError plays a sequence beyond its frames: keypoints given before each frame
+// (Tracker::setKeypoints, in place of the detector's), which keypoints are scored, and how
+// many frames had a detection in use.
+struct TrackHooks {
+  std::function<void(Tracker&, const synth::SyntheticFrame&)> beforeFrame;
+  bool scoreSkeleton = false;  // the skeleton's keypoints, not the report's blend
+  int* detectedFrames = nullptr;
+};
+
 // Mean 21-keypoint error (m) over frames [from, count) of the sequence played from frame
 // `first`, ground-truth start.
 double trackMeanError(synth::SyntheticSequence& seq, const TrackerSettings& settings, int from,
-                      int count, int first = 0) {
+                      int count, int first = 0, const TrackHooks& hooks = {}) {
   auto tracker = Tracker::create(seq.model(0), seq.intrinsics(), settings);
   EXPECT_TRUE(tracker) << tracker.message();
   if (!tracker) return 1e9;
   double sum = 0.0;
   int n = 0;
+  if (hooks.detectedFrames != nullptr) *hooks.detectedFrames = 0;
   for (int f = 0; f < count; ++f) {
     const synth::SyntheticFrame& frame = seq.frame(first + f);
     if (f == 0) (*tracker)->initialize(frame.hands[0].pose);
-    const TrackResult& r = (*tracker)->track(frame.depth);
+    if (hooks.beforeFrame) hooks.beforeFrame(**tracker, frame);
+    const HandResult& h = (*tracker)->track(frame.depth).hands[0];
+    if (hooks.detectedFrames != nullptr && h.detected) ++*hooks.detectedFrames;
     if (f < from) continue;
-    sum += meanKeypointError(r.hands[0].keypoints21, frame.hands[0].keypoints);
+    sum += meanKeypointError(hooks.scoreSkeleton ? h.skeletonKeypoints21 : h.keypoints21,
+                             frame.hands[0].keypoints);
     ++n;
   }
   return sum / n;
@@ -294,21 +308,13 @@ TEST(DetectorTracking, AWrongDetectionThatFitsFarWorseDoesNotReplaceTheHand) {
   ASSERT_TRUE(seq);
   const Keypoints21 fist = seq->frame(39).hands[0].keypoints;
   const auto meanError = [&](const TrackerSettings& settings, int& detected) {
-    auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
-    EXPECT_TRUE(tracker) << tracker.message();
-    if (!tracker) return 1e9;
-    (*tracker)->initialize(seq->frame(0).hands[0].pose);
-    double sum = 0.0;
-    detected = 0;
-    for (int f = 0; f < 12; ++f) {
-      const synth::SyntheticFrame& frame = seq->frame(f);
+    TrackHooks hooks;
+    hooks.beforeFrame = [&](Tracker& tracker, const synth::SyntheticFrame& frame) {
       const Vec3 wristOffset = frame.hands[0].keypoints[0] - fist[0];
-      (*tracker)->setKeypoints(truthMovedBy(fist, wristOffset), model::Side::Right);
-      const HandResult& h = (*tracker)->track(frame.depth).hands[0];
-      detected += h.detected ? 1 : 0;
-      if (f >= 6) sum += meanKeypointError(h.keypoints21, frame.hands[0].keypoints);
-    }
-    return sum / 6.0;
+      tracker.setKeypoints(truthMovedBy(fist, wristOffset), model::Side::Right);
+    };
+    hooks.detectedFrames = &detected;
+    return trackMeanError(*seq, settings, 6, 12, 0, hooks);
   };
   int detectedGuarded = 0, detectedAlways = 0;
   const double guarded = meanError(TrackerSettings{}, detectedGuarded);
@@ -418,22 +424,16 @@ TEST(DetectorTracking, AgreementWithTheKeypointsChoosesAmongTheSimulations) {
   ASSERT_TRUE(seq) << seq.message();
   constexpr int kFirst = 1200, kFrames = 300;
   const auto meanError = [&](const TrackerSettings& settings) {
-    auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
-    EXPECT_TRUE(tracker) << tracker.message();
-    if (!tracker) return 1e9;
     std::mt19937 rng(5);
     std::normal_distribution<float> noise(0.0f, 0.010f);
-    double sum = 0.0;
-    for (int f = 0; f < kFrames; ++f) {
-      const synth::SyntheticFrame& frame = seq->frame(kFirst + f);
-      if (f == 0) (*tracker)->initialize(frame.hands[0].pose);
+    TrackHooks hooks;
+    hooks.beforeFrame = [&](Tracker& tracker, const synth::SyntheticFrame& frame) {
       detect::DetectedKeypoints given = truthMovedBy(frame.hands[0].keypoints, Vec3::Zero());
       for (Vec3& p : given.points) p += Vec3(noise(rng), noise(rng), noise(rng));
-      (*tracker)->setKeypoints(given, model::Side::Right);
-      const TrackResult& r = (*tracker)->track(frame.depth);
-      sum += meanKeypointError(r.hands[0].skeletonKeypoints21, frame.hands[0].keypoints);
-    }
-    return sum / kFrames;
+      tracker.setKeypoints(given, model::Side::Right);
+    };
+    hooks.scoreSkeleton = true;
+    return trackMeanError(*seq, settings, 0, kFrames, kFirst, hooks);
   };
   // The tracked skeleton's own keypoints are compared: the report's blend would move both
   // toward the given keypoints alike.

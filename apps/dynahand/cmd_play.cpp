@@ -35,6 +35,7 @@ struct PlayOptions {
   bool serve = false, fast = false, loop = false;
   viewer::ServerOptions server;
   std::string webRoot;
+  std::vector<std::string> set;  // --set NAME=VALUE: the tracker's settings (recordings)
 };
 
 // Where the hand poses come from: a tracked recording or a pose file (camera frame).
@@ -87,6 +88,8 @@ std::unique_ptr<PoseSource> openSource(const PlayOptions& o, const model::Articu
     throw UsageError("live cameras: record with 'dynahand record' first, then play the recording");
   if (!std::filesystem::exists(o.input)) throw UsageError("input not found: " + o.input);
   if (std::filesystem::path(o.input).extension() == ".jsonl") {
+    if (!o.set.empty())
+      throw UsageError("--set goes with a recording (a pose file is not tracked)");
     auto poses = model::loadPoseSequence(o.input);
     if (!poses) throw UsageError(poses.message());
     const Status s = model::checkPoseSequence(*poses, hand);
@@ -96,9 +99,12 @@ std::unique_ptr<PoseSource> openSource(const PlayOptions& o, const model::Articu
   }
   auto reader = SequenceReader::open(o.input);
   if (!reader) throw UsageError(reader.message());
-  auto tracker = track::Tracker::create(hand, reader->info().intrinsics);
+  track::TrackerSettings settings;
+  applyTrackerSettings(o.set, settings);
+  auto tracker = track::Tracker::create(hand, reader->info().intrinsics, settings);
   if (!tracker) {
-    if (detectorWeightsGiven("")) throw UsageError(tracker.message());  // DYNAHAND_DETECTOR
+    // DYNAHAND_DETECTOR's weights or --set's values
+    if (detectorWeightsGiven("") || !o.set.empty()) throw UsageError(tracker.message());
     throw std::runtime_error(tracker.message());
   }
   if (o.init == "gt") {
@@ -201,6 +207,7 @@ class ServedClock {
 };
 
 int runPlay(const PlayOptions& o) {
+  checkTrackerSettings(o.set);  // a bad --set is reported before any input is opened
   if (!std::filesystem::exists(o.scene)) throw UsageError("scene not found: " + o.scene);
   auto scene = playground::loadScene(o.scene);
   if (!scene) throw UsageError(scene.message());
@@ -320,6 +327,7 @@ const CommandRegistration kPlayCommand{Command{
       sub.add_flag("--fast", o->fast, "--serve: run as fast as possible, not at the input's rate");
       sub.add_option("--web-root", o->webRoot,
                      "--serve: the page's folder instead of the built one");
+      addTrackerSettingOption(sub, o->set);
       sub.footer(
           "Examples:\n"
           "  dynahand synth --motion reach-grasp-lift --frames 132 --out /tmp/g\n"

@@ -18,10 +18,12 @@ struct ServeCommandOptions {
   viewer::ServerOptions server;
   std::string webRoot;
   bool fast = false;
-  int stopAfter = 0;  // frames; 0 = until Ctrl-C
+  int stopAfter = 0;             // frames; 0 = until Ctrl-C
+  std::vector<std::string> set;  // --set NAME=VALUE: the tracker's settings
 };
 
 int runServe(ServeCommandOptions o) {
+  applyTrackerSettings(o.set, o.serve.settings);
   auto session = viewer::ServeSession::open(o.serve);
   if (!session) throw UsageError(session.message());
   o.server.webRoot = viewer::findViewerPage(o.webRoot);
@@ -112,6 +114,7 @@ const CommandRegistration kServeCommand{Command{
                      "bytes waiting for one client before it skips frames")
           ->check(CLI::Range(std::size_t{1024}, std::size_t{1} << 30));
       sub.add_option("--web-root", o->webRoot, "serve the page from this folder instead");
+      addTrackerSettingOption(sub, o->set);
       sub.footer(
           "Open the printed address in a browser. Other programs can read the stream: see\n"
           "docs/formats/viewer-stream.md and examples/python/dynahand_client.py. The stream\n"

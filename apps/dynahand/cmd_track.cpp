@@ -347,10 +347,7 @@ void printSummary(const TrackOptions& o, const std::optional<io::HandSizeRecord>
 }
 
 int runTrack(const TrackOptions& o) {
-  {
-    track::TrackerSettings names;  // a bad --set is reported before any input is opened
-    applyTrackerSettings(o.set, names);
-  }
+  checkTrackerSettings(o.set);  // a bad --set is reported before any input is opened
   FrameInput in = openInput(o);
   const SequenceInfo& info = in.info;
   if (o.sizeOnly && o.handSize != "auto")

@@ -39,6 +39,11 @@ void applyTrackerSettings(const std::vector<std::string>& assignments,
       throw UsageError("--set: " + s.message());
 }
 
+void checkTrackerSettings(const std::vector<std::string>& assignments) {
+  track::TrackerSettings settings;
+  applyTrackerSettings(assignments, settings);
+}
+
 void disableSimulations(const std::vector<std::string>& names, track::TrackerSettings& settings) {
   for (const std::string& name : names) {
     int kind = 0;

@@ -57,6 +57,8 @@ void addTrackerSettingOption(CLI::App& sub, std::vector<std::string>& assignment
 // Applies them in order; an unknown name or a bad value is a UsageError naming it.
 void applyTrackerSettings(const std::vector<std::string>& assignments,
                           track::TrackerSettings& settings);
+// The same check without settings to apply them to (before any input is opened).
+void checkTrackerSettings(const std::vector<std::string>& assignments);
 
 // --disable SIMULATION...: each named simulation (track::strategyName) off; an unknown name is
 // a UsageError naming it.

@@ -1,6 +1,6 @@
-// TrackerSettings' fields by their dotted names (setTrackerSetting, namedSettings): what
-// `dynahand track --set` and `dynahand bench --set` take, so every setting the docs compare
-// can be tried without a rebuild.
+// TrackerSettings' fields by their dotted names (setTrackerSetting, namedSettings): what the
+// commands' `--set` (track, bench, serve, play) and Python's Tracker(settings=...) take, so
+// every setting the docs compare can be tried without a rebuild.
 #include <charconv>
 #include <cmath>
 #include <variant>

@@ -15,7 +15,6 @@ OUT/detector.onnx and OUT/detector.json (the members' cards and the average's fi
 measured by `dynahand detector eval` as train_detector.py does).
 """
 import argparse
-import json
 import os
 import sys
 
@@ -58,15 +57,6 @@ def average(paths):
     return result
 
 
-def member_card(path):
-    """The card train_detector.py wrote beside a member's weights (None when there is none)."""
-    card = os.path.join(os.path.dirname(os.path.abspath(path)), "detector.json")
-    if not os.path.exists(card):
-        return None
-    with open(card) as f:
-        return json.load(f)
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -90,7 +80,7 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     onnx_path = os.path.join(a.out, "detector.onnx")
     onnx.save(model, onnx_path)
-    cards = [member_card(m) for m in a.members]
+    cards = [train_detector.card_beside(m) for m in a.members]
     first = next((c for c in cards if c is not None), {})
     card = {
         "format": "dynahand-detector-card", "version": 1,

@@ -274,6 +274,15 @@ def card_figures(dynahand, onnx_path, quick=False):
             "p95_mm": measured["p95_mm"], "mean_confidence": measured["mean_confidence"]}
 
 
+def card_beside(onnx_path):
+    """The model card (detector.json) in the folder of an exported network, or None."""
+    path = os.path.join(os.path.dirname(os.path.abspath(onnx_path)), "detector.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
 def write_card(out, card):
     """OUT/detector.json; prints the figures."""
     with open(os.path.join(out, "detector.json"), "w") as f:
@@ -397,10 +406,8 @@ def main():
     if a.init:
         # The run this one fine-tuned, from the card beside its weights: a fine-tuned network's
         # whole recipe is then in one card.
-        base_card = os.path.join(os.path.dirname(os.path.abspath(a.init)), "detector.json")
-        if os.path.exists(base_card):
-            with open(base_card) as f:
-                base = json.load(f)
+        base = card_beside(a.init)
+        if base is not None:
             card["training"]["base"] = {"training": base.get("training"),
                                         "figures": base.get("figures")}
     write_card(a.out, card)

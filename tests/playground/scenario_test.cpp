@@ -165,7 +165,7 @@ float deepestInside(const physics::World& world, physics::BodyId box, const mode
 }
 
 // A fist pushed sideways (little finger first, `push-sideways`) 6 cm into a wall at its side;
-// the tracker follows it (3.6 mm mean keypoint error) and its tracked hand gets 6 cm in.
+// the tracker follows it (3.5 mm mean keypoint error) and its tracked hand gets 6 cm in.
 TEST(Scenario, HandStaysOutsideAWallTheTrackedHandGoesThrough) {
   auto pg = build("wall");
   ASSERT_NE(pg, nullptr);

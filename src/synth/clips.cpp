@@ -220,10 +220,8 @@ std::vector<ClipDefinition> makeClips() {
                  key(2.2f, cylinderGrasp())}}});
   // Playground scenarios (docs/playground.md): offsets along the forearm frame, so with the
   // head-mounted camera y is up and z is forward. reach-grasp-lift opens with the thumb
-  // abducted (preGrasp) and moves only 2 cm before closing: the tracker follows that (6 mm
-  // mean keypoint error with --init gt), while a 7.5 cm approach along the camera axis with
-  // the thumb beside the palm lost the hand (40-60 mm while closing). The scenes place the
-  // hand low enough (their camera) for the 2 cm approach to reach the object.
+  // abducted (preGrasp), ready to close around the object, and moves 2 cm before closing; the
+  // scenes place the hand low enough (their camera) for that approach to reach the object.
   c.push_back(
       {{"reach-grasp-lift",
         "open hand (thumb abducted) lowering 2 cm onto an object, closing around it, "

@@ -1,7 +1,8 @@
 // Scenario runner for the playground tests: a synthetic clip seen by the desk-facing (or the
 // head-mounted) synthetic tof sensor, tracked by the tracker (initialised from the first frame's
 // ground truth), drives the playground; `onFrame` sees the playground after every input frame.
-// Set DYNAHAND_PLAYGROUND_TRUTH=1 to drive it by the ground truth instead (tuning only).
+// Set DYNAHAND_PLAYGROUND_TRUTH=1 to drive it by the ground truth instead (tuning only), and
+// DYNAHAND_SCENARIO_SEED=N to render the clip with sensor noise seed N instead of 1.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -50,6 +51,10 @@ inline ScenarioStats runScenario(
   o.profile = "tof";
   o.frameCount = frames;
   o.scene.placement = placement;
+  // The synthetic sensor's noise seed (default 1): DYNAHAND_SCENARIO_SEED=N reruns a scenario on
+  // other noise, to see how far its outcome rests on one draw.
+  if (const char* seed = std::getenv("DYNAHAND_SCENARIO_SEED"))
+    o.seed = std::strtoull(seed, nullptr, 10);
   auto seq = synth::SyntheticSequence::create(o);
   EXPECT_TRUE(seq.ok()) << (seq.ok() ? "" : seq.message());
   ScenarioStats stats;

@@ -1,6 +1,6 @@
-// Playground scenarios with the tracker in the loop: synthetic tof frames of a
-// clip seen by the desk-facing camera -> tracker (ground-truth first frame) -> powered
-// ragdoll hand in a scene. Thresholds are the issue's.
+// Playground scenarios with the tracker in the loop: synthetic tof frames of a clip seen by
+// the desk-facing camera (the lever and the box grasp also by the head-mounted one) -> tracker
+// (ground-truth first frame) -> powered ragdoll hand in a scene. Thresholds are the issue's.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -58,25 +58,52 @@ struct RunCounter {
   }
 };
 
+// The box scenario's measures: how high the box went and its longest stay >= 10 cm up.
+struct GraspOutcome {
+  float highest = 0.0f;  // m above its start
+  int heldFrames = 0;    // longest run of frames >= 10 cm up
+};
+
+GraspOutcome graspLiftAndHold(Playground& pg, synth::CameraPlacement placement) {
+  const int box = pg.bodyIndex("box");
+  const float startY = pg.bodyPose(box).p.y();
+  GraspOutcome out;
+  RunCounter held;
+  const auto stats = test::runScenario(
+      pg, "reach-grasp-lift", 132,
+      [&](int, const Playground& p) {
+        const float lift = p.bodyPose(box).p.y() - startY;
+        out.highest = std::max(out.highest, lift);
+        held.add(lift >= 0.10f);
+      },
+      placement);
+  expectTrackedMostly(stats);
+  out.heldFrames = held.longest;
+  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", cm(out.highest),
+              seconds(out.heldFrames));
+  return out;
+}
+
 // The power grasp closes fingers and thumb around the box from above; the joint drives are
 // springs, so the digits squeeze it to a force balance (docs/playground.md).
 TEST(Scenario, GraspLiftAndHoldABox) {
   auto pg = build("grasp");
   ASSERT_NE(pg, nullptr);
-  const int box = pg->bodyIndex("box");
-  const float startY = pg->bodyPose(box).p.y();
-  float highest = 0.0f;
-  RunCounter held;
-  const auto stats = test::runScenario(*pg, "reach-grasp-lift", 132, [&](int, const Playground& p) {
-    const float lift = p.bodyPose(box).p.y() - startY;
-    highest = std::max(highest, lift);
-    held.add(lift >= 0.10f);
-  });
-  expectTrackedMostly(stats);
-  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", cm(highest),
-              seconds(held.longest));
-  EXPECT_GE(highest, 0.10f);
-  EXPECT_GE(held.longest, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
+  const GraspOutcome g = graspLiftAndHold(*pg, synth::CameraPlacement::DeskFacing);
+  EXPECT_GE(g.highest, 0.10f);
+  EXPECT_GE(g.heldFrames, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
+}
+
+// The same grasp seen by the head-mounted camera. A knife-edge test: from about frame 30 the
+// forearm hides the thumb, which the tracker then tucks part of the way toward the index, and
+// the box is held for 2 s on 7 of 16 sensor noise seeds (DYNAHAND_SCENARIO_SEED,
+// docs/playground.md).
+TEST(Scenario, GraspLiftAndHoldABoxSeenFromTheHead) {
+  auto pg = build("grasp", "reach-grasp-lift");
+  ASSERT_NE(pg, nullptr);
+  const GraspOutcome g = graspLiftAndHold(*pg, synth::CameraPlacement::HeadMounted);
+  EXPECT_GE(g.highest, 0.10f);
+  EXPECT_GE(g.heldFrames, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
 }
 
 // The same clip grasps the barbell's bar between the end caps.

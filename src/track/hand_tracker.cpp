@@ -513,7 +513,7 @@ void HandTracker::prepareFrameStart(const HandFrame& frame) {
   // Fitted here, not in a lane: lanes may run on other threads.
   // The keypoints bound as labelled points (the feature simulation) only when the frame starts
   // far from them: nearer, pulling bones onto the detector's noisy joints made the result
-  // worse than the fitted start alone (whole animbank, desk and head-mounted).
+  // worse than the fitted start alone (motion suite, docs/tracker.md).
   start.bindLabels = engageDetector && !warmFit;
   start.fittedStart = engageDetector && fitDetectorPose(warmFit ? &startAngles_ : nullptr)
                           ? &detectorPose_

@@ -4,10 +4,12 @@
 # median and largest p50 per-frame time (ms) of one benchmark. Rotation spreads outside load
 # over all of them; a single run says little about a change of a few per cent.
 # Usage: scripts/bench_ab.sh ROUNDS BENCH_TRACKER [BENCH_TRACKER ...]
+#   Each BENCH_TRACKER is a command line, so one binary can run with a tracker setting changed:
+#   'DYNAHAND_BENCH_SET=detector.engageDistanceM=0.02 build/release/bench/track/bench_tracker'
 #   FILTER: the benchmark (default wave_tof_320x240/, e.g. count_tof_320x240/, wave_sl_640x480/)
 set -euo pipefail
 if [[ $# -lt 2 ]]; then
-  sed -n '2,8p' "$0"
+  sed -n '2,10p' "$0"
   exit 2
 fi
 rounds=$1
@@ -16,7 +18,7 @@ filter=${FILTER:-wave_tof_320x240/}
 declare -A times
 for ((round = 0; round < rounds; ++round)); do
   for bin in "$@"; do
-    p50=$("$bin" --benchmark_filter="$filter" 2>&1 | sed -n 's/.*p50_ms=\([0-9.]*\).*/\1/p' | head -1)
+    p50=$(bash -c "$bin --benchmark_filter='$filter'" 2>&1 | sed -n 's/.*p50_ms=\([0-9.]*\).*/\1/p' | head -1)
     times[$bin]="${times[$bin]:-} ${p50:-nan}"
   done
 done

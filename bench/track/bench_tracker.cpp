@@ -1,11 +1,15 @@
 // Tracker speed: per-frame time of Tracker::track (cloud pipeline, the learned detector when
 // its weights are found, every simulation, the error metric) on synthetic clips, one core.
 // Target: p50 <= 3 ms at 320x240 with the detector. Each benchmark iteration is one frame;
-// p50/p99 come from the per-frame times of all iterations.
+// p50/p99 come from the per-frame times of all iterations. DYNAHAND_BENCH_SET="NAME=VALUE
+// [NAME=VALUE ...]" sets tracker settings by name (as `dynahand track --set`), so that a
+// setting's cost is timed in alternation with the same binary (scripts/bench_ab.sh).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -37,6 +41,14 @@ void BM_TrackFrame(benchmark::State& state, const std::string& clip, const std::
   TrackerSettings settings;
   if (!allStrategies) settings.strategies = {true, false, false, false, false, false};
   settings.detector.enabled = detector && allStrategies;
+  if (const char* assignments = std::getenv("DYNAHAND_BENCH_SET")) {
+    std::istringstream words(assignments);
+    for (std::string assignment; words >> assignment;)
+      if (const Status set = setTrackerSetting(settings, assignment); !set.ok()) {
+        state.SkipWithError(("DYNAHAND_BENCH_SET: " + set.message()).c_str());
+        return;
+      }
+  }
   auto tracker = Tracker::create(seq->model(0), seq->intrinsics(), settings);
   if (!tracker) {
     state.SkipWithError(tracker.error().message.c_str());

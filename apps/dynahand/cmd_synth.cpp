@@ -83,6 +83,10 @@ void addSynthOptions(CLI::App& sub, const std::shared_ptr<SynthFlags>& flags) {
                  "play poses instead of a clip: a pose JSONL (docs/formats/pose.md) or the "
                  "original authors' .pose (e.g. animbank.pose)")
       ->check(CLI::ExistingFile);
+  sub.add_option("--pose-start", o.poseStart,
+                 "with --pose-file: the first pose played (frame i plays pose N + i, wrapping)")
+      ->capture_default_str()
+      ->check(kNonNegative);
   sub.add_option("--intel-model", o.intelModelFile,
                  "the authors' model_hand.json for a .pose file (default: beside it)")
       ->check(CLI::ExistingFile);

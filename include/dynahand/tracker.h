@@ -123,6 +123,13 @@ struct DetectorSettings {
   /// ... and last frame's detection is the crop's centre only while its box centre lies
   /// within this distance (m) of that mean: farther, it was read from the forearm.
   float limbEndCropDistanceM = 0.10f;
+  /// The detection is the mean of the network's keypoints and confidences over its crop and
+  /// this many more (0..4), centred shiftedCropM away along the image's diagonals (x and y
+  /// both, in the camera frame at the crop centre's depth). The network's keypoints move by
+  /// millimetres when its crop moves by a pixel; the mean is nearer the truth than one crop
+  /// (docs/tracker.md, "Learned detector"). Each crop costs one network run (about 1 ms).
+  int shiftedCrops = 2;
+  float shiftedCropM = 0.008f;  ///< m, the shifted crops' offset along x and along y
 };
 
 /// Everything the tracker is set up with; the defaults are the shipped configuration.

@@ -61,6 +61,8 @@ const SettingField kFields[] = {
   {"detector.objectDistanceM", DYNAHAND_FIELD(float, detector.objectDistanceM), "m, points farther than this from the detected skeleton are left out (0: none)"},
   {"detector.reportBlend", DYNAHAND_FIELD(float, detector.reportBlend), "reported keypoints moved toward the detector's by this times the confidence"},
   {"detector.reportBlendReachM", DYNAHAND_FIELD(float, detector.reportBlendReachM), "m, the blend fades to nothing at this distance"},
+  {"detector.shiftedCrops", DYNAHAND_FIELD(int, detector.shiftedCrops), "the detection is the mean over its crop and this many more, shifted (0..4)"},
+  {"detector.shiftedCropM", DYNAHAND_FIELD(float, detector.shiftedCropM), "m, the shifted crops' centres this far off along x and y"},
   {"detector.limbEndRadius", DYNAHAND_FIELD(float, detector.limbEndRadius), "hand lengths: a new crop is centred on the points this near the limb's free end (0: off)"},
   {"detector.limbEndCropDistanceM", DYNAHAND_FIELD(float, detector.limbEndCropDistanceM), "m, last frame's detection centres the crop while this near that mean"},
   {"cloud.voxelSizeM", DYNAHAND_FIELD(float, cloud.voxelSizeM), "m, voxel edge"},

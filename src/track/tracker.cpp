@@ -26,6 +26,42 @@ bool liesOnPoints(const Vec3& p, const std::vector<Vec3>& points, float distance
   return false;
 }
 
+// The detection `k`, made from the crop centred at `centre`, averaged with the detections of
+// DetectorSettings::shiftedCrops more crops, centred shiftedCropM away along the image's
+// diagonals. The network's keypoints move by several millimetres when its crop moves by a
+// pixel (the crop is resampled from the depth by nearest pixel): the mean over a few crops
+// is nearer the truth than any one of them (docs/tracker.md, "Learned detector").
+void averageShiftedCrops(const DetectorSettings& settings, const CloudFrame& cloud,
+                         detect::KeypointDetector& detector, detect::HandCrop& crop,
+                         const Vec3& centre, bool mirrored, const detect::CropHandSplit* split,
+                         detect::DetectedKeypoints& k) {
+  const int shifted = settings.shiftedCrops;
+  const float d = settings.shiftedCropM;
+  if (!k.valid || shifted <= 0) return;
+  const std::array<Vec3, 4> shifts = {Vec3(d, d, 0.0f), Vec3(-d, -d, 0.0f), Vec3(d, -d, 0.0f),
+                                      Vec3(-d, d, 0.0f)};
+  detect::DetectedKeypoints sum = k;
+  int count = 1;
+  for (int i = 0; i < shifted; ++i) {
+    const Vec3 c = centre + shifts[static_cast<std::size_t>(i)];
+    if (!detect::makeCrop(cloud, mirrored, crop, &c, split)) continue;
+    const detect::DetectedKeypoints& e = detector.detect(crop, cloud.intrinsics);
+    if (!e.valid) continue;
+    for (std::size_t j = 0; j < sum.points.size(); ++j) {
+      sum.points[j] += e.points[j];
+      sum.confidence[j] += e.confidence[j];
+    }
+    sum.meanConfidence += e.meanConfidence;
+    ++count;
+  }
+  const float inverse = 1.0f / static_cast<float>(count);
+  for (std::size_t j = 0; j < sum.points.size(); ++j) {
+    k.points[j] = sum.points[j] * inverse;
+    k.confidence[j] = sum.confidence[j] * inverse;
+  }
+  k.meanConfidence = sum.meanConfidence * inverse;
+}
+
 }  // namespace
 
 const char* strategyName(StrategyKind kind) {
@@ -124,6 +160,9 @@ Result<std::unique_ptr<Tracker>> Tracker::create(const model::ArticulatedModel& 
     return Error{"detector disagreeDistanceM must be > 0 m and disagreeFrames >= 1"};
   if (!(s.detector.replaceMaxErrorRatio >= 0.0f) || std::isinf(s.detector.replaceMaxErrorRatio))
     return Error{"detector replaceMaxErrorRatio must be >= 0 and finite (0: always replace)"};
+  if (s.detector.shiftedCrops < 0 || s.detector.shiftedCrops > 4 ||
+      !(s.detector.shiftedCropM >= 0.0f && s.detector.shiftedCropM <= 0.05f))
+    return Error{"detector shiftedCrops must be 0..4 and shiftedCropM in [0, 0.05] m"};
   if (!(s.detector.limbEndRadius >= 0.0f) || !(s.detector.limbEndCropDistanceM > 0.0f))
     return Error{"detector limbEndRadius must be >= 0 and limbEndCropDistanceM > 0 m"};
   if (!keypointDetector) s.detector.enabled = false;
@@ -270,21 +309,27 @@ const TrackResult& Tracker::track(const DepthFrame& frame) {
       }
       const bool mirrored = h == 1;
       k.valid = false;
+      Vec3 cropCentre = handCentre;  // where the crop k came from is centred
       if (onHand) {
         if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre, split))
           k = m.keypointDetector->detect(m.crop, m.intrinsics);
       } else if ((handCount == 1 || centre != nullptr) &&
                  detect::makeCrop(m.cloud, mirrored, m.crop, centre, split)) {
         k = m.keypointDetector->detect(m.crop, m.intrinsics);
+        cropCentre = centre != nullptr ? *centre : m.cloud.segment.centroid;
         if (k.valid) {
           handCentre = detect::keypointBoxCentre(k.points);
           if (detect::makeCrop(m.cloud, mirrored, m.crop, &handCentre, split)) {
             const detect::DetectedKeypoints& centred =
                 m.keypointDetector->detect(m.crop, m.intrinsics);
-            if (centred.valid) k = centred;
+            if (centred.valid) {
+              k = centred;
+              cropCentre = handCentre;
+            }
           }
         }
       }
+      averageShiftedCrops(ds, m.cloud, *m.keypointDetector, m.crop, cropCentre, mirrored, split, k);
       in.keypoints = k.valid ? &k : nullptr;
     }
     in.points = m.handPoints[h];

@@ -2,13 +2,16 @@
 // head-mounted) synthetic tof sensor, tracked by the tracker (initialised from the first frame's
 // ground truth), drives the playground; `onFrame` sees the playground after every input frame.
 // Set DYNAHAND_PLAYGROUND_TRUTH=1 to drive it by the ground truth instead (tuning only), and
-// DYNAHAND_SCENARIO_SEED=N to render the clip with sensor noise seed N instead of 1.
+// DYNAHAND_SCENARIO_SEED=N to render the clip with sensor noise seed N instead of 1 (a scenario
+// run over several seeds gives its own).
 #pragma once
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "dynahand/playground.h"
@@ -45,7 +48,8 @@ inline Pose headMountedCamera(const Pose& deskCamera, const std::string& clip) {
 inline ScenarioStats runScenario(
     Playground& pg, const std::string& clip, int frames,
     const std::function<void(int, const Playground&)>& onFrame,
-    synth::CameraPlacement placement = synth::CameraPlacement::DeskFacing) {
+    synth::CameraPlacement placement = synth::CameraPlacement::DeskFacing,
+    std::optional<std::uint64_t> seed = std::nullopt) {
   synth::SynthOptions o;
   o.clip = clip;
   o.profile = "tof";
@@ -53,8 +57,9 @@ inline ScenarioStats runScenario(
   o.scene.placement = placement;
   // The synthetic sensor's noise seed (default 1): DYNAHAND_SCENARIO_SEED=N reruns a scenario on
   // other noise, to see how far its outcome rests on one draw.
-  if (const char* seed = std::getenv("DYNAHAND_SCENARIO_SEED"))
-    o.seed = std::strtoull(seed, nullptr, 10);
+  if (const char* env = std::getenv("DYNAHAND_SCENARIO_SEED"))
+    o.seed = std::strtoull(env, nullptr, 10);
+  if (seed) o.seed = *seed;
   auto seq = synth::SyntheticSequence::create(o);
   EXPECT_TRUE(seq.ok()) << (seq.ok() ? "" : seq.message());
   ScenarioStats stats;

@@ -58,25 +58,35 @@ struct RunCounter {
   }
 };
 
-// The box scenario: the box is lifted >= 10 cm and stays that high for >= 2 s.
-void expectBoxLiftedAndHeld(Playground& pg, synth::CameraPlacement placement) {
+// The box scenario: how high the box got (m) and the longest run of frames it stayed at least
+// 10 cm up.
+struct BoxGrasp {
+  float highest = 0.0f;
+  int heldFrames = 0;
+  bool liftedAndHeld() const {
+    return highest >= 0.10f && heldFrames >= static_cast<int>(2.0f * kFps);
+  }
+};
+
+BoxGrasp graspBox(Playground& pg, synth::CameraPlacement placement,
+                  std::optional<std::uint64_t> seed = std::nullopt) {
   const int box = pg.bodyIndex("box");
   const float startY = pg.bodyPose(box).p.y();
-  float highest = 0.0f;
+  BoxGrasp r;
   RunCounter held;
   const auto stats = test::runScenario(
       pg, "reach-grasp-lift", 132,
       [&](int, const Playground& p) {
         const float lift = p.bodyPose(box).p.y() - startY;
-        highest = std::max(highest, lift);
+        r.highest = std::max(r.highest, lift);
         held.add(lift >= 0.10f);
       },
-      placement);
+      placement, seed);
   expectTrackedMostly(stats);
-  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", cm(highest),
-              seconds(held.longest));
-  EXPECT_GE(highest, 0.10f);
-  EXPECT_GE(held.longest, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
+  r.heldFrames = held.longest;
+  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", cm(r.highest),
+              seconds(r.heldFrames));
+  return r;
 }
 
 // The power grasp closes fingers and thumb around the box from above; the joint drives are
@@ -84,17 +94,26 @@ void expectBoxLiftedAndHeld(Playground& pg, synth::CameraPlacement placement) {
 TEST(Scenario, GraspLiftAndHoldABox) {
   auto pg = build("grasp");
   ASSERT_NE(pg, nullptr);
-  expectBoxLiftedAndHeld(*pg, synth::CameraPlacement::DeskFacing);
+  const BoxGrasp r = graspBox(*pg, synth::CameraPlacement::DeskFacing);
+  EXPECT_GE(r.highest, 0.10f);
+  EXPECT_GE(r.heldFrames, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
 }
 
-// The same grasp seen by the head-mounted camera. A knife-edge test: from about frame 30 the
-// forearm hides the thumb, which the tracker then tucks part of the way toward the index, and
-// the box is held for 2 s on 7 of 16 sensor noise seeds (DYNAHAND_SCENARIO_SEED,
+// The same grasp seen by the head-mounted camera. Knife-edge: from about frame 30 the forearm
+// hides the thumb, which the tracker then tucks part of the way toward the index, and whether
+// the box stays in the hand for 2 s turns on the sensor's noise. So the scenario runs on 16
+// noise seeds and asks for the box lifted and held on at least 5 (7 with the shipped tracker;
 // docs/playground.md).
 TEST(Scenario, GraspLiftAndHoldABoxSeenFromTheHead) {
-  auto pg = build("grasp", "reach-grasp-lift");
-  ASSERT_NE(pg, nullptr);
-  expectBoxLiftedAndHeld(*pg, synth::CameraPlacement::HeadMounted);
+  int held = 0;
+  for (std::uint64_t seed = 1; seed <= 16; ++seed) {
+    auto pg = build("grasp", "reach-grasp-lift");
+    ASSERT_NE(pg, nullptr);
+    std::printf("noise seed %d: ", static_cast<int>(seed));
+    if (graspBox(*pg, synth::CameraPlacement::HeadMounted, seed).liftedAndHeld()) ++held;
+  }
+  std::printf("lifted and held 2 s on %d of 16 noise seeds\n", held);
+  EXPECT_GE(held, 5);
 }
 
 // The same clip grasps the barbell's bar between the end caps.

@@ -249,6 +249,19 @@ TEST(Tracker, RejectsBadSettings) {
     badRatio.detector.replaceMaxErrorRatio = pull;  // no error is a NaN or infinite ratio of one
     EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badRatio).ok());
   }
+  // The shifted detector crops: 0..4 of them, up to 5 cm off.
+  for (const int crops : {-1, 5}) {
+    TrackerSettings badCrops;
+    badCrops.detector.shiftedCrops = crops;
+    const auto tracker = Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badCrops);
+    ASSERT_FALSE(tracker.ok());
+    EXPECT_NE(tracker.message().find("shiftedCrops"), std::string::npos) << tracker.message();
+  }
+  for (const float shift : {-0.001f, 0.06f, std::numeric_limits<float>::quiet_NaN()}) {
+    TrackerSettings badShift;
+    badShift.detector.shiftedCropM = shift;
+    EXPECT_FALSE(Tracker::create(hand, Intrinsics{320, 240, 300, 300, 160, 120}, badShift).ok());
+  }
 }
 
 }  // namespace

@@ -1,0 +1,31 @@
+# dynahand synth --pose-start N: frame i plays pose N + i. A clip's own pose file (poses.jsonl)
+# played from pose 5 gives, as its first frame, the ground truth of the clip's frame 5 (to
+# 0.1 mm: the pose file's angles are rounded, so the keypoints are compared to 4 decimals).
+# cmake -DDYNAHAND=... -DWORK_DIR=... -P PoseStart.cmake
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+execute_process(COMMAND ${DYNAHAND} synth --motion wave --profile tof --frames 8 --out ${WORK_DIR}/clip
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dynahand synth failed (${rc})")
+endif()
+execute_process(COMMAND ${DYNAHAND} synth --pose-file ${WORK_DIR}/clip/poses.jsonl --pose-start 5
+                        --profile tof --frames 3 --out ${WORK_DIR}/from5 RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dynahand synth --pose-start failed (${rc})")
+endif()
+file(STRINGS ${WORK_DIR}/clip/groundtruth.jsonl clip_lines)
+file(STRINGS ${WORK_DIR}/from5/groundtruth.jsonl from5_lines)
+list(GET clip_lines 5 clip5)
+list(GET clip_lines 4 clip4)
+list(GET from5_lines 0 first)
+foreach(line clip5 clip4 first)
+  string(REGEX REPLACE "\"frame\": *[0-9]+" "" ${line} "${${line}}")
+  string(REGEX REPLACE "([0-9]\\.[0-9][0-9][0-9][0-9])[0-9]*" "\\1" ${line} "${${line}}")
+endforeach()
+if(NOT first STREQUAL clip5)
+  message(FATAL_ERROR "frame 0 of --pose-start 5 is not the clip's frame 5:\n${first}\n${clip5}")
+endif()
+if(first STREQUAL clip4)
+  message(FATAL_ERROR "frames 4 and 5 of the clip are alike: the check proves nothing")
+endif()

@@ -58,35 +58,34 @@ struct RunCounter {
   }
 };
 
-// The box scenario: how high the box got (m) and the longest run of frames it stayed at least
-// 10 cm up.
-struct BoxGrasp {
-  float highest = 0.0f;
-  int heldFrames = 0;
+// The box scenario's measures: how high the box went and its longest stay >= 10 cm up.
+struct GraspOutcome {
+  float highest = 0.0f;  // m above its start
+  int heldFrames = 0;    // longest run of frames >= 10 cm up
   bool liftedAndHeld() const {
     return highest >= 0.10f && heldFrames >= static_cast<int>(2.0f * kFps);
   }
 };
 
-BoxGrasp graspBox(Playground& pg, synth::CameraPlacement placement,
-                  std::optional<std::uint64_t> seed = std::nullopt) {
+GraspOutcome graspLiftAndHold(Playground& pg, synth::CameraPlacement placement,
+                              std::optional<std::uint64_t> seed = std::nullopt) {
   const int box = pg.bodyIndex("box");
   const float startY = pg.bodyPose(box).p.y();
-  BoxGrasp r;
+  GraspOutcome out;
   RunCounter held;
   const auto stats = test::runScenario(
       pg, "reach-grasp-lift", 132,
       [&](int, const Playground& p) {
         const float lift = p.bodyPose(box).p.y() - startY;
-        r.highest = std::max(r.highest, lift);
+        out.highest = std::max(out.highest, lift);
         held.add(lift >= 0.10f);
       },
       placement, seed);
   expectTrackedMostly(stats);
-  r.heldFrames = held.longest;
-  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", cm(r.highest),
-              seconds(r.heldFrames));
-  return r;
+  out.heldFrames = held.longest;
+  std::printf("box lifted up to %.1f cm, held >= 10 cm for %.2f s\n", cm(out.highest),
+              seconds(out.heldFrames));
+  return out;
 }
 
 // The power grasp closes fingers and thumb around the box from above; the joint drives are
@@ -94,9 +93,9 @@ BoxGrasp graspBox(Playground& pg, synth::CameraPlacement placement,
 TEST(Scenario, GraspLiftAndHoldABox) {
   auto pg = build("grasp");
   ASSERT_NE(pg, nullptr);
-  const BoxGrasp r = graspBox(*pg, synth::CameraPlacement::DeskFacing);
-  EXPECT_GE(r.highest, 0.10f);
-  EXPECT_GE(r.heldFrames, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
+  const GraspOutcome g = graspLiftAndHold(*pg, synth::CameraPlacement::DeskFacing);
+  EXPECT_GE(g.highest, 0.10f);
+  EXPECT_GE(g.heldFrames, static_cast<int>(2.0f * kFps)) << "held 2 s without dropping";
 }
 
 // The same grasp seen by the head-mounted camera. Knife-edge: from about frame 30 the forearm
@@ -110,7 +109,7 @@ TEST(Scenario, GraspLiftAndHoldABoxSeenFromTheHead) {
     auto pg = build("grasp", "reach-grasp-lift");
     ASSERT_NE(pg, nullptr);
     std::printf("noise seed %d: ", static_cast<int>(seed));
-    if (graspBox(*pg, synth::CameraPlacement::HeadMounted, seed).liftedAndHeld()) ++held;
+    if (graspLiftAndHold(*pg, synth::CameraPlacement::HeadMounted, seed).liftedAndHeld()) ++held;
   }
   std::printf("lifted and held 2 s on %d of 16 noise seeds\n", held);
   EXPECT_GE(held, 5);
